@@ -1,0 +1,294 @@
+// mtled run: build the scene, run it, write the outputs (summary.json last).
+#include <fmt/format.h>
+#include <omp.h>
+#include <sys/resource.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <thread>
+
+#include "commands.hpp"
+#include "mtled/log.hpp"
+#include "mtled/output.hpp"
+#include "mtled/simulation.hpp"
+#include "mtled/version.hpp"
+#include "progress.hpp"
+
+namespace fs = std::filesystem;
+
+namespace mtled::app {
+
+namespace {
+
+std::atomic<bool> interrupted{false};
+extern "C" void on_interrupt(int) { interrupted = true; }
+
+struct Interrupted : std::runtime_error {
+  Interrupted() : std::runtime_error("interrupted (Ctrl-C)") {}
+};
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+double peak_rss_mb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+json vec_json(const Vec3& v) { return json::array({v[0], v[1], v[2]}); }
+
+// Per-tet fields of result.vtu, averaged over each tet's integration points.
+std::vector<CellField> cell_fields(const Model& model, std::span<const double> u, const std::vector<std::string>& names) {
+  std::vector<CellField> fields;
+  const auto tets = static_cast<std::size_t>(model.mesh().tet_count());
+  for (const auto& name : names) {
+    CellField field{name, name == "von_mises_stress" || name == "jacobian" ? 1 : 9, {}};
+    field.values.assign(tets * static_cast<std::size_t>(field.components), 0.0);
+    std::vector<int> count(tets, 0);
+    for (Index ip = 0; ip < model.integration_point_count(); ++ip) {
+      const Mat3 F = model.deformation_gradient(ip, u);
+      const double J = F.determinant();
+      Mat3 S = Mat3::Zero();
+      model.ip_material(ip).stress(F, S);
+      const Mat3 cauchy = F * S * F.transpose() / J;
+      Mat3 value = Mat3::Zero();
+      double scalar = 0.0;
+      if (name == "green_strain") value = 0.5 * (F.transpose() * F - Mat3::Identity());
+      if (name == "cauchy_stress") value = cauchy;
+      if (name == "von_mises_stress") {
+        const Mat3 deviator = cauchy - cauchy.trace() / 3.0 * Mat3::Identity();
+        scalar = std::sqrt(1.5 * deviator.squaredNorm());
+      }
+      if (name == "jacobian") scalar = J;
+      const auto t = static_cast<std::size_t>(model.ip_tets()[ip]);
+      ++count[t];
+      if (field.components == 1) {
+        field.values[t] += scalar;
+      } else {
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) field.values[9 * t + 3 * a + b] += value(a, b);
+      }
+    }
+    for (std::size_t t = 0; t < tets; ++t)
+      for (int c = 0; c < field.components; ++c) field.values[t * field.components + c] /= std::max(count[t], 1);
+    fields.push_back(std::move(field));
+  }
+  return fields;
+}
+
+// Records needle.csv and reactions.csv rows, steps/*.vtu snapshots and the progress display.
+class RunObserver final : public StepObserver {
+ public:
+  RunObserver(const OutputFolder& folder, const Simulation& simulation, const Parameters& output, bool progress)
+      : folder_(folder),
+        history_every_(output.integer("history_every_steps")),
+        snapshot_every_(output.integer("every_steps")),
+        progress_(progress) {
+    if (simulation.needle() != nullptr) {
+      needle_ = folder.open_stream("needle.csv");
+      needle_.out() << "time_s,depth_m,force_N,phase\n";
+    }
+    if (!simulation.constraint_sets().empty()) {
+      reactions_ = folder.open_stream("reactions.csv");
+      reactions_.out() << "time_s,set,fx_N,fy_N,fz_N\n";
+    }
+  }
+
+  void on_step(const Simulation& simulation) override {
+    if (interrupted) throw Interrupted();
+    const long step = simulation.step();
+    if (step % history_every_ == 0) record(simulation);
+    if (snapshot_every_ > 0 && step % snapshot_every_ == 0 && step > 0) snapshot(simulation);
+    std::string text = fmt::format("step {}  t {:.4g} s", step, simulation.time());
+    if (const auto* needle = simulation.needle())
+      text += fmt::format("  depth {:.2f} mm  force {:.4g} N  {}", 1e3 * needle->status().depth,
+                          needle->status().force, needle->status().phase);
+    progress_.update(simulation.load_fraction(), text);
+  }
+
+  void finish(const Simulation& simulation) {
+    progress_.finish();
+    if (last_recorded_ != simulation.step()) record(simulation);
+    needle_.commit();
+    reactions_.commit();
+    if (!snapshots_.empty()) {
+      folder_.write_file("series.pvd", [&](std::ostream& out) {
+        out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+        for (const auto& [time, file] : snapshots_)
+          out << fmt::format("<DataSet timestep=\"{:.10g}\" file=\"{}\"/>\n", time, file);
+        out << "</Collection>\n</VTKFile>\n";
+      });
+    }
+  }
+
+ private:
+  void record(const Simulation& simulation) {
+    last_recorded_ = simulation.step();
+    if (needle_.is_open()) {
+      const NeedleStatus s = simulation.needle()->status();
+      needle_.out() << fmt::format("{:.10g},{:.10g},{:.10g},{}\n", simulation.time(), s.depth, s.force, s.phase);
+    }
+    if (reactions_.is_open()) {
+      for (const auto* set : simulation.constraint_sets()) {
+        const Vec3 r = set->total_reaction();
+        reactions_.out() << fmt::format("{:.10g},{},{:.10g},{:.10g},{:.10g}\n", simulation.time(), set->name, r[0], r[1],
+                                        r[2]);
+      }
+    }
+  }
+
+  void snapshot(const Simulation& simulation) {
+    const std::string file = fmt::format("steps/{:06d}.vtu", simulation.step());
+    const auto u = simulation.interpolated_displacement();
+    folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, simulation.model().mesh(), u, {}); });
+    snapshots_.emplace_back(simulation.time(), file);
+  }
+
+  const OutputFolder& folder_;
+  long history_every_, snapshot_every_;
+  long last_recorded_ = -1;
+  OutputFolder::Stream needle_, reactions_;
+  std::vector<std::pair<double, std::string>> snapshots_;
+  Progress progress_;
+};
+
+}  // namespace
+
+int run_scene(const RunOptions& options) {
+  const auto wall_start = Clock::now();
+  SceneDocument document = read_scene(options.scene.scene, options.scene.overrides);
+  PluginCatalog catalog(plugin_search_path(options.scene.plugin_paths, scene_plugin_paths(document)));
+  const Scene scene = validate_scene(std::move(document), catalog);
+
+  const fs::path output = options.output.empty() ? fs::path("out") / options.scene.scene.stem() : options.output;
+  const OutputFolder folder(output);
+  folder.clear_previous_outputs();
+
+  const int threads = options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  omp_set_num_threads(threads);
+
+  json summary = {{"status", "running"},
+                  {"mtled_version", MTLED_VERSION_STRING},
+                  {"scene", fs::absolute(options.scene.scene).string()},
+                  {"overrides", options.scene.overrides},
+                  {"threads", threads}};
+  auto write_summary = [&] { folder.write_file("summary.json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; }); };
+  write_summary();
+
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+  std::unique_ptr<Simulation> simulation;
+  std::unique_ptr<RunObserver> observer;
+  auto fill_common = [&](double setup_time, double solve_time) {
+    summary["plugins_loaded"] = catalog.loaded_files();
+    summary["setup_time_s"] = setup_time;
+    summary["solve_time_s"] = solve_time;
+    summary["wall_time_s"] = seconds_since(wall_start);
+    summary["peak_rss_mb"] = peak_rss_mb();
+    if (!simulation) return;
+    const Model& model = simulation->model();
+    const auto stats = model.ip_support_statistics();
+    summary["nodes"] = model.node_count();
+    summary["integration_points"] = model.integration_point_count();
+    summary["support_size"] = {{"min", stats.min}, {"mean", stats.mean}, {"max", stats.max}};
+    summary["min_reciprocal_condition"] = stats.min_reciprocal_condition;
+    summary["steps"] = simulation->step();
+    summary["simulated_time_s"] = simulation->time();
+    summary["stable_time_step_s"] = simulation->unscaled_stable_time_step();
+    summary["constraint_factorisations"] = simulation->constraints().factorisations();
+    summary["force_evaluations"] = simulation->force_evaluations();
+    summary["ip_updates_per_s"] = solve_time > 0 ? static_cast<double>(simulation->force_evaluations()) *
+                                                       model.integration_point_count() / solve_time
+                                                 : 0.0;
+    const json report = simulation->integrator().report();
+    summary["integrator"] = report;
+    summary["time_step_s"] = report.value("time_step_s", 0.0);
+  };
+
+  double setup_time = 0.0;
+  Clock::time_point solve_start;
+  try {
+    const auto setup_start = Clock::now();
+    simulation = std::make_unique<Simulation>(scene, catalog);
+    setup_time = seconds_since(setup_start);
+    log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time, simulation->unscaled_stable_time_step());
+    observer = std::make_unique<RunObserver>(folder, *simulation, scene.output, options.progress);
+    solve_start = Clock::now();
+    simulation->run(observer.get());
+    observer->finish(*simulation);
+  } catch (const InstabilityError& e) {
+    if (observer) observer->finish(*simulation);
+    fill_common(setup_time, seconds_since(solve_start));
+    const Diagnostic& d = e.diagnostic();
+    json where = json::array();
+    for (std::size_t i = 0; i < d.coordinates.size(); ++i) {
+      json item = {{"coordinates_m", vec_json(d.coordinates[i])}};
+      if (i < d.nodes.size()) item["node"] = d.nodes[i];
+      if (i < d.integration_points.size()) item["integration_point"] = d.integration_points[i];
+      where.push_back(item);
+    }
+    summary["status"] = "unstable";
+    summary["diagnostic"] = {{"step", d.step}, {"time_s", d.time}, {"what", d.what}, {"detail", d.detail}, {"where", where}};
+    // The last state whose forces were admissible; never named result.vtu.
+    const auto last = d.what == "inverted_material" ? simulation->previous_displacement() : simulation->displacement();
+    std::vector<double> u(last.size());
+    simulation->model().interpolate(last, u);
+    folder.write_file("last_good_state.vtu", [&](std::ostream& out) { write_vtu(out, simulation->model().mesh(), u, {}); });
+    summary["last_good_state"] = "last_good_state.vtu";
+    write_summary();
+    log().error("{}", e.what());
+    log().error("wrote {} with status \"unstable\"", (folder.path() / "summary.json").string());
+    return 3;
+  } catch (const Interrupted& e) {
+    fill_common(setup_time, seconds_since(solve_start));
+    summary["status"] = "interrupted";
+    write_summary();
+    log().error("interrupted at step {}; {} says so", simulation ? simulation->step() : 0,
+                (folder.path() / "summary.json").string());
+    return 1;
+  } catch (const InputError& e) {
+    fill_common(setup_time, 0.0);
+    const InputError located = locate_problems(e, scene.document);
+    summary["status"] = "invalid_input";
+    summary["error"] = located.what();
+    write_summary();
+    throw located;
+  } catch (const std::exception& e) {
+    fill_common(setup_time, 0.0);
+    summary["status"] = "failed";
+    summary["error"] = e.what();
+    write_summary();
+    throw;
+  }
+  const double solve_time = seconds_since(solve_start);
+
+  const auto u = simulation->interpolated_displacement();
+  double max_displacement = 0.0;
+  for (std::size_t i = 0; i < u.size(); i += 3)
+    max_displacement = std::max(max_displacement, std::sqrt(u[i] * u[i] + u[i + 1] * u[i + 1] + u[i + 2] * u[i + 2]));
+  const auto fields = cell_fields(simulation->model(), simulation->displacement(), scene.output.string_list("cell_data"));
+  folder.write_file("result.vtu", [&](std::ostream& out) { write_vtu(out, simulation->model().mesh(), u, fields); });
+
+  fill_common(setup_time, solve_time);
+  summary["max_displacement_m"] = max_displacement;
+  if (const auto* needle = simulation->needle()) {
+    const NeedleStatus s = needle->status();
+    summary["needle"] = {{"final_depth_m", s.depth},
+                         {"final_force_N", s.force},
+                         {"puncture_depth_m", s.puncture_depth >= 0 ? json(s.puncture_depth) : json(nullptr)},
+                         {"phase", s.phase},
+                         {"driven_nodes", s.driven_nodes}};
+  }
+  json reactions = json::object();
+  for (const auto* set : simulation->constraint_sets()) reactions[set->name] = vec_json(set->total_reaction());
+  summary["final_reactions_N"] = reactions;
+  summary["status"] = "ok";
+  write_summary();
+  log().info("done: {} steps, solve {:.2f} s, {:.3g} integration-point updates/s; results in {}", simulation->step(),
+             solve_time, summary["ip_updates_per_s"].get<double>(), folder.path().string());
+  return 0;
+}
+
+}  // namespace mtled::app

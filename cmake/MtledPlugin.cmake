@@ -1,0 +1,37 @@
+# mtled_add_plugin(CATEGORY category NAME name SOURCES src... [LINK_LIBRARIES libs...])
+#
+# Builds one mtled component as its own run-time-loaded module, `mtled-CATEGORY-NAME.so`. The file name is the
+# component: the kernel maps a scene's "type" to the file without loading anything else. Symbols are
+# hidden except the handshake and registration entry points exported by MTLED_PLUGIN (mtled/plugin.hpp).
+function(mtled_add_plugin)
+  cmake_parse_arguments(ARG "" "CATEGORY;NAME" "SOURCES;LINK_LIBRARIES" ${ARGN})
+  set(name ${ARG_NAME})
+  set(category ${ARG_CATEGORY})
+  set(categories mesh shape_function material boundary needle integrator)
+  if(NOT category IN_LIST categories)
+    message(FATAL_ERROR "mtled_add_plugin(${name}): CATEGORY must be one of ${categories}")
+  endif()
+  if(NOT ARG_SOURCES)
+    message(FATAL_ERROR "mtled_add_plugin(${name}): SOURCES is required")
+  endif()
+  if(NOT name MATCHES "^[a-z][a-z0-9_]*$")
+    message(FATAL_ERROR "mtled_add_plugin(${name}): names are lower_snake_case")
+  endif()
+  set(target mtled_${category}_${name})
+  add_library(${target} MODULE ${ARG_SOURCES})
+  set_target_properties(${target} PROPERTIES
+    PREFIX ""
+    OUTPUT_NAME "mtled-${category}-${name}"
+    CXX_VISIBILITY_PRESET hidden
+    VISIBILITY_INLINES_HIDDEN ON
+    INSTALL_RPATH "$ORIGIN/../..")
+  if(TARGET mtled_core)
+    target_link_libraries(${target} PRIVATE mtled_core mtled_warnings ${ARG_LINK_LIBRARIES})
+    set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${MTLED_PLUGIN_OUTPUT_DIR})
+    install(TARGETS ${target} LIBRARY DESTINATION ${MTLED_PLUGIN_INSTALL_DIR})
+    set_property(GLOBAL APPEND PROPERTY MTLED_PLUGIN_TARGETS ${target})
+  else()
+    target_link_libraries(${target} PRIVATE mtled::core ${ARG_LINK_LIBRARIES})
+  endif()
+  target_compile_definitions(${target} PRIVATE MTLED_PLUGIN_NAME="${name}" MTLED_PLUGIN_CATEGORY="${category}")
+endfunction()

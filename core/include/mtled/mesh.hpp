@@ -1,0 +1,49 @@
+#pragma once
+// A tetrahedral mesh as read or generated: its vertices become the field nodes and its tets the background
+// integration cells. Regions (physical volume groups, ELSETs) pick materials; node sets (physical surface
+// groups, NSETs) pick boundary conditions.
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "mtled/node_selector.hpp"
+#include "mtled/types.hpp"
+
+namespace mtled {
+
+struct TetMesh {
+  std::vector<Vec3> points;
+  std::vector<std::array<Index, 4>> tets;
+  std::vector<Index> tet_region;          // index into region_names, one per tet
+  std::vector<std::string> region_names;  // at least one ("all" when the source has none)
+  std::map<std::string, std::vector<Index>> node_sets;
+  std::string source;  // file path or generator description, for messages
+
+  Index node_count() const { return static_cast<Index>(points.size()); }
+  Index tet_count() const { return static_cast<Index>(tets.size()); }
+};
+
+// Signed volume of tet `t` (positive when its vertices are ordered right-handed).
+double tet_volume(const TetMesh& mesh, Index t);
+
+// Drops vertices no tet uses (Gmsh files carry geometry points and surface-only nodes), renumbers, keeps
+// node sets restricted to the surviving nodes.
+void remove_unused_nodes(TetMesh& mesh);
+
+// Checks the mesh: at least one tet, finite coordinates, indices in range, no zero-volume tets. Inverted
+// tets (negative volume) are reordered when `fix_orientation`, otherwise reported. Throws InputError
+// naming `mesh.source`.
+void check_mesh(TetMesh& mesh, bool fix_orientation = true);
+
+// Per-node flag: 1 if the node lies on a boundary face (a face used by exactly one tet).
+std::vector<char> surface_nodes(const TetMesh& mesh);
+
+// Per-node mean length of the mesh edges that meet at the node.
+std::vector<double> mean_edge_length_at_nodes(const TetMesh& mesh);
+
+// Nodes chosen by a selector. Throws InputError (at `pointer`) for an unknown group, listing the groups.
+std::vector<Index> select_nodes(const NodeSelector& selector, const TetMesh& mesh,
+                                const std::vector<char>& surface, const std::string& pointer);
+
+}  // namespace mtled

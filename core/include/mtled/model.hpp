@@ -1,0 +1,114 @@
+#pragma once
+// The meshless discretisation of MTLED: field nodes at the mesh vertices, integration points in the
+// background tets, MLS-type shape functions on node-centred supports (R_I = d_c x mean edge length at I),
+// all in the reference configuration (Total Lagrangian: computed once). Shape-function gradients and
+// support lists are stored contiguously, one row per integration point (CSR).
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mtled/interfaces/material.hpp"
+#include "mtled/interfaces/shape_functions.hpp"
+#include "mtled/mesh.hpp"
+#include "mtled/point_search.hpp"
+
+namespace mtled {
+
+// Compressed rows: row r has entries offsets[r] .. offsets[r+1]-1.
+struct SupportRows {
+  std::vector<std::int64_t> offsets;
+  std::vector<Index> nodes;
+  std::vector<double> values;     // N_I at the row's point (empty when not stored)
+  std::vector<double> gradients;  // dN_I/dX, 3 per entry (empty when not stored)
+
+  Index rows() const { return offsets.empty() ? 0 : static_cast<Index>(offsets.size() - 1); }
+  std::int64_t size(Index row) const { return offsets[row + 1] - offsets[row]; }
+};
+
+struct SupportStatistics {
+  Index min = 0, max = 0;
+  double mean = 0.0;
+  double min_reciprocal_condition = 0.0;
+};
+
+class Model {
+ public:
+  struct Options {
+    int integration_points_per_tet = 1;
+  };
+
+  // `region_materials[r]` fills mesh region r.
+  Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
+        std::vector<std::shared_ptr<const Material>> region_materials, Options options);
+  ~Model();
+
+  // Geometry
+  const TetMesh& mesh() const { return mesh_; }
+  Index node_count() const { return mesh_.node_count(); }
+  const std::vector<Vec3>& nodes() const { return mesh_.points; }
+  const std::vector<char>& surface() const { return surface_; }
+  const std::vector<double>& node_spacing() const { return spacing_; }  // mean edge length per node
+  const std::vector<double>& support_radius() const { return radius_; }
+  double length_scale() const { return length_scale_; }  // bounding-box diagonal
+  const PointSearch& node_search() const { return *node_search_; }
+
+  // Integration points
+  Index integration_point_count() const { return static_cast<Index>(ip_weight_.size()); }
+  const std::vector<Vec3>& ip_positions() const { return ip_position_; }
+  const std::vector<double>& ip_weights() const { return ip_weight_; }
+  const std::vector<Index>& ip_tets() const { return ip_tet_; }
+  const Material& ip_material(Index ip) const { return *materials_[ip_material_[ip]]; }
+  const SupportRows& ip_supports() const { return ip_rows_; }       // gradients
+  const SupportRows& node_interpolation() const { return node_rows_; }  // values at the nodes
+  SupportStatistics ip_support_statistics() const { return ip_stats_; }
+
+  // Lumped mass per node from per-integration-point density multipliers (empty: none). Each integration
+  // point gives rho w / n to each of its n support nodes.
+  std::vector<double> lumped_mass(std::span<const double> density_scale = {}) const;
+  // Critical time step of each integration point for the unscaled density (Joldes et al. 2012):
+  // dt = 2 / (c sqrt(n sum_I |grad N_I|^2)), c = sqrt((lambda + 2 mu) / rho).
+  const std::vector<double>& ip_critical_time_steps() const { return ip_dt_; }
+
+  // Internal nodal forces f_I = sum_ip w F S grad N_I for nodal parameters u (3 per node). Returns -1, or
+  // the lowest-numbered integration point whose F is inadmissible (J <= 0 or not finite); f is then
+  // incomplete. Parallel over integration points (OpenMP); not re-entrant.
+  Index internal_forces(std::span<const double> u, std::span<double> f) const;
+  double strain_energy(std::span<const double> u) const;
+  Mat3 deformation_gradient(Index ip, std::span<const double> u) const;
+  // Interpolated displacement at every node: u(X_J) = sum_I N_I(X_J) u_I.
+  void interpolate(std::span<const double> u, std::span<double> out) const;
+  Vec3 interpolate_node(Index node, std::span<const double> u) const;
+
+  // Shape functions at any point of the body (nodes whose supports cover it). False if none do or the fit
+  // fails.
+  bool shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values) const;
+
+ private:
+  void build_integration_points(int points_per_tet);
+  void build_supports();
+  void build_time_steps();
+
+  TetMesh mesh_;
+  std::shared_ptr<const ShapeFunctions> shape_functions_;
+  std::vector<std::shared_ptr<const Material>> materials_;  // per region
+  std::vector<char> surface_;
+  std::vector<double> spacing_;
+  std::vector<double> radius_;
+  double max_radius_ = 0.0;
+  double length_scale_ = 0.0;
+  std::unique_ptr<PointSearch> node_search_;
+
+  std::vector<Vec3> ip_position_;
+  std::vector<double> ip_weight_;
+  std::vector<Index> ip_tet_;
+  std::vector<std::uint16_t> ip_material_;
+  SupportRows ip_rows_;
+  SupportRows node_rows_;
+  SupportStatistics ip_stats_;
+  std::vector<double> ip_dt_;
+
+  mutable std::vector<std::vector<double>> thread_forces_;
+};
+
+}  // namespace mtled

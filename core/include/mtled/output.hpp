@@ -1,0 +1,65 @@
+#pragma once
+// A run's output folder. Every file is written under a temporary name and renamed when complete, so the
+// folder never holds a half-written file; files an earlier run left are removed first, so old and new
+// results never mix.
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mtled/mesh.hpp"
+
+namespace mtled {
+
+class OutputFolder {
+ public:
+  // Creates the folder; throws InputError when it cannot be created or written.
+  explicit OutputFolder(std::filesystem::path folder);
+  const std::filesystem::path& path() const { return folder_; }
+
+  // Removes the files mtled writes (summary.json, result.vtu, series.pvd, steps/, *.csv, ...).
+  void clear_previous_outputs() const;
+  void write_file(const std::string& name, const std::function<void(std::ostream&)>& write) const;
+
+  // A file filled during a run (history CSVs): rows go to NAME.partial; commit() renames it into place.
+  class Stream {
+   public:
+    Stream() = default;
+    Stream(std::filesystem::path final_path);
+    std::ostream& out() { return out_; }
+    void commit();
+    bool is_open() const { return out_.is_open(); }
+
+   private:
+    std::filesystem::path final_path_;
+    std::filesystem::path partial_path_;
+    std::ofstream out_;
+  };
+  Stream open_stream(const std::string& name) const;
+
+ private:
+  std::filesystem::path folder_;
+};
+
+// Cell data of result.vtu: one tuple of `components` values per tet.
+struct CellField {
+  std::string name;
+  int components = 1;
+  std::vector<double> values;
+};
+
+// An unstructured-grid VTK XML file (ASCII, full precision) readable by ParaView and 3D Slicer: the
+// reference mesh with point data "displacement" and "region" and the given cell data.
+void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> displacement,
+               const std::vector<CellField>& cell_fields);
+
+// What `mtled compare` reads back from a run's result.vtu.
+struct ResultField {
+  std::vector<Vec3> points;
+  std::vector<Vec3> displacement;
+};
+ResultField read_result_vtu(const std::filesystem::path& file);
+
+}  // namespace mtled

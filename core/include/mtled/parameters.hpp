@@ -1,0 +1,172 @@
+#pragma once
+// One declaration per component: every parameter's type, default (or required), unit, allowed range and
+// doc. The same declaration drives scene validation, `mtled plugins --describe`, `mtled schema`, the
+// generated parameter reference (docs/parameters.md) and the conformance tests.
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "mtled/errors.hpp"
+#include "mtled/node_selector.hpp"
+#include "mtled/types.hpp"
+
+namespace mtled {
+
+using json = nlohmann::json;
+
+// What a component is for. Each category has its own interface in mtled/interfaces/ and its own place in
+// a scene. `scene` is the kernel's own sections (discretisation, output).
+enum class Category { mesh, shape_function, material, boundary, needle, integrator, scene };
+
+std::string_view to_string(Category category);
+
+// For the compile-time check in MTLED_PLUGIN that a plugin's interface matches its CMake CATEGORY.
+constexpr Category category_from_literal(std::string_view text) {
+  if (text == "mesh") return Category::mesh;
+  if (text == "shape_function") return Category::shape_function;
+  if (text == "material") return Category::material;
+  if (text == "boundary") return Category::boundary;
+  if (text == "needle") return Category::needle;
+  if (text == "integrator") return Category::integrator;
+  return Category::scene;
+}
+std::optional<Category> category_from_string(std::string_view text);
+const std::vector<Category>& plugin_categories();
+
+enum class ParameterType { number, integer, boolean, string, vector3, number_list, string_list, node_set };
+
+std::string_view to_string(ParameterType type);
+
+// Allowed values of a number (or of each entry of a number list). Vectors use `nonzero` for |v| > 0.
+struct NumericRange {
+  std::optional<double> min, max;
+  bool min_exclusive = false;
+  bool max_exclusive = false;
+  bool nonzero = false;
+
+  bool contains(double value) const;
+  bool unbounded() const { return !min && !max && !nonzero; }
+  std::string describe() const;  // "> 0", "[0, 1]", "!= 0", "any"
+};
+
+struct ParameterSpec {
+  std::string name;
+  ParameterType type = ParameterType::number;
+  std::optional<json> default_value;  // used when the key is absent
+  bool required = true;               // false when there is a default or the parameter is optional
+  std::string unit;                   // SI unit ("Pa", "1/Pa", "m", "kg/m^3", "s"), "1" if dimensionless
+  NumericRange range;
+  std::vector<json> choices;  // allowed values (strings, string-list entries, integers)
+  std::string doc;
+
+  json to_json() const;         // for `mtled plugins --json`
+  json to_json_schema() const;  // for `mtled schema`
+};
+
+class ParameterBuilder {
+ public:
+  explicit ParameterBuilder(ParameterSpec& spec) : spec_(spec) {}
+  ParameterBuilder& doc(std::string text);
+  ParameterBuilder& unit(std::string unit);
+  ParameterBuilder& defaults(json value);
+  ParameterBuilder& optional();  // may be absent; the component reads it with Parameters::optional_*
+  ParameterBuilder& positive();
+  ParameterBuilder& non_negative();
+  ParameterBuilder& nonzero();
+  ParameterBuilder& at_least(double value);
+  ParameterBuilder& greater_than(double value);
+  ParameterBuilder& at_most(double value);
+  ParameterBuilder& less_than(double value);
+  ParameterBuilder& between(double low, double high);  // inclusive
+  ParameterBuilder& choices(std::vector<json> allowed);
+
+ private:
+  ParameterSpec& spec_;
+};
+
+class ComponentDeclaration {
+ public:
+  ComponentDeclaration() = default;
+  ComponentDeclaration(std::string name, Category category) : name_(std::move(name)), category_(category) {}
+
+  ComponentDeclaration& summary(std::string text);
+  // A working parameter block (without "type"): shown by `mtled plugins --describe`, used by the
+  // conformance tests to build every component of a category.
+  ComponentDeclaration& example(json block);
+  ParameterBuilder number(std::string name);
+  ParameterBuilder integer(std::string name);
+  ParameterBuilder boolean(std::string name);
+  ParameterBuilder string(std::string name);
+  ParameterBuilder vector3(std::string name);
+  ParameterBuilder number_list(std::string name);
+  ParameterBuilder string_list(std::string name);
+  ParameterBuilder node_set(std::string name);
+  ComponentDeclaration& add(ParameterSpec spec);  // a spec built elsewhere (the kernel's common parameters)
+
+  const std::string& name() const { return name_; }
+  Category category() const { return category_; }
+  const std::string& summary() const { return summary_; }
+  const json& example() const { return example_; }
+  const std::vector<ParameterSpec>& parameters() const { return parameters_; }
+  const ParameterSpec* find(std::string_view name) const;
+
+  json to_json() const;         // name, category, summary, parameters
+  json to_json_schema() const;  // object schema with "type" fixed to the name
+
+ private:
+  ParameterBuilder add_new(std::string name, ParameterType type);
+  std::string name_;
+  Category category_ = Category::scene;
+  std::string summary_;
+  json example_ = json::object();
+  std::vector<ParameterSpec> parameters_;
+};
+
+// A component's validated parameter values, defaults filled in. Getters of undeclared names or of the
+// wrong type are programming errors (std::logic_error), never user errors.
+class Parameters {
+ public:
+  Parameters() = default;
+  Parameters(const ComponentDeclaration& declaration, json values, std::string pointer);
+
+  const std::string& component() const { return component_; }
+  const std::string& pointer() const { return pointer_; }     // "/materials/0"
+  std::string pointer(std::string_view name) const;           // "/materials/0/mu"
+  bool has(std::string_view name) const;                      // present (given or defaulted)
+  const json& values() const { return values_; }
+
+  double number(std::string_view name) const;
+  long integer(std::string_view name) const;
+  bool boolean(std::string_view name) const;
+  std::string string(std::string_view name) const;
+  Vec3 vector3(std::string_view name) const;
+  std::vector<double> number_list(std::string_view name) const;
+  std::vector<std::string> string_list(std::string_view name) const;
+  NodeSelector node_set(std::string_view name) const;
+
+  std::optional<double> optional_number(std::string_view name) const;
+  std::optional<std::string> optional_string(std::string_view name) const;
+  std::optional<Vec3> optional_vector3(std::string_view name) const;
+
+ private:
+  const json& value(std::string_view name, ParameterType expected) const;
+  std::string component_;
+  std::string pointer_;
+  json values_ = json::object();
+  std::vector<std::pair<std::string, ParameterType>> types_;
+};
+
+// Checks one component block against its declaration and appends every problem found (wrong types,
+// out-of-range values, missing required keys, unknown keys with the closest valid names). Keys listed in
+// `reserved` (such as "type") are accepted without a declaration. Returns the values with defaults filled.
+Parameters validate_parameters(const ComponentDeclaration& declaration, const json& block,
+                               const std::string& pointer, std::vector<Problem>& problems,
+                               const std::vector<std::string>& reserved = {"type"});
+
+// Escapes a key for use in a JSON pointer ("~" -> "~0", "/" -> "~1").
+std::string pointer_escape(std::string_view key);
+
+}  // namespace mtled

@@ -1,0 +1,85 @@
+#pragma once
+// A scene built into a running simulation: the mesh, the meshless model, the drivers (boundary conditions
+// and the needle), the integrator and the state. Integrators advance the state through the services
+// below; the kernel's loop (run) checks stability and calls the observer between steps.
+#include <functional>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "mtled/constraints.hpp"
+#include "mtled/model.hpp"
+#include "mtled/scene.hpp"
+
+namespace mtled {
+
+struct StepObserver {
+  virtual ~StepObserver();
+  virtual void on_step(const class Simulation& simulation) = 0;
+};
+
+class Simulation {
+ public:
+  Simulation(const Scene& scene, PluginCatalog& catalog);
+  ~Simulation();
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  // ---- services for integrators
+  const Model& model() const { return *model_; }
+  std::span<double> displacement() { return u_; }
+  std::span<const double> displacement() const { return u_; }
+  std::span<const double> previous_displacement() const { return u_previous_; }
+  double time() const { return load_.time; }
+  long step() const { return load_.step; }
+  double load_fraction() const { return load_.load_fraction; }
+  std::span<const double> mass() const { return mass_; }
+  // Critical time step (before any safety factor) for the current masses: min over integration points.
+  double stable_time_step() const { return stable_time_step_; }
+  // Dynamic relaxation only: raise the density at each integration point so that its critical step is at
+  // least `target` (mass scaling; changes the dynamics, not the steady state).
+  void scale_masses(double target);
+  // Internal forces for u (3 per node). Throws InstabilityError naming the integration point when F is
+  // inadmissible (J <= 0).
+  void internal_forces(std::span<const double> u, std::span<double> f);
+  bool has_external_forces() const { return force_drivers_ > 0; }
+  void external_forces(std::span<double> f);
+  // Moves to the next step: drivers update for (new_time, new_load_fraction), u_new is corrected to satisfy
+  // every constraint (reactions = correction / alpha), then becomes the current state.
+  void complete_step(std::span<double> u_new, double new_time, double new_load_fraction, double alpha);
+
+  // ---- the loop and what outputs read
+  void run(StepObserver* observer);
+  TimeIntegrator& integrator() { return *integrator_; }
+  const TimeIntegrator& integrator() const { return *integrator_; }
+  const NeedleModel* needle() const { return needle_.get(); }
+  const std::vector<NodalConstraints*>& constraint_sets() const { return constraint_sets_; }
+  const ConstraintSystem& constraints() const { return *constraint_system_; }
+  double unscaled_stable_time_step() const { return unscaled_stable_time_step_; }
+  long force_evaluations() const { return force_evaluations_; }
+  // Interpolated displacement at every node (3 per node).
+  std::vector<double> interpolated_displacement() const;
+
+ private:
+  void update_drivers();
+  void check_finite(std::span<const double> u_new, double new_time) const;
+
+  std::unique_ptr<Model> model_;
+  std::vector<std::shared_ptr<BoundaryCondition>> boundaries_;
+  std::shared_ptr<NeedleModel> needle_;
+  std::vector<Driver*> drivers_;
+  int force_drivers_ = 0;
+  std::vector<NodalConstraints*> constraint_sets_;
+  std::unique_ptr<ConstraintSystem> constraint_system_;
+  std::shared_ptr<TimeIntegrator> integrator_;
+
+  LoadState load_;
+  std::vector<double> u_, u_previous_;
+  std::vector<double> mass_;
+  bool mass_changed_ = true;
+  double stable_time_step_ = 0.0;
+  double unscaled_stable_time_step_ = 0.0;
+  long force_evaluations_ = 0;
+};
+
+}  // namespace mtled

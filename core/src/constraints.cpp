@@ -1,0 +1,98 @@
+#include "mtled/constraints.hpp"
+
+#include <fmt/format.h>
+
+#include <set>
+
+namespace mtled {
+
+void ConstraintSystem::update(const std::vector<NodalConstraints*>& sets, std::span<const double> mass,
+                              bool mass_changed) {
+  bool changed = mass_changed || sets.size() != sets_.size();
+  for (std::size_t s = 0; s < sets.size() && !changed; ++s)
+    changed = sets[s] != sets_[s] || sets[s]->revision != revisions_[s];
+  if (!changed) return;
+  sets_ = sets;
+  revisions_.clear();
+  for (const auto* set : sets_) revisions_.push_back(set->revision);
+  rebuild(mass);
+}
+
+void ConstraintSystem::rebuild(std::span<const double> mass) {
+  ++factorisations_;
+  inverse_mass_.resize(mass.size());
+  for (std::size_t i = 0; i < mass.size(); ++i) inverse_mass_[i] = 1.0 / mass[i];
+  const SupportRows& psi = model_.node_interpolation();
+  const auto n = static_cast<Eigen::Index>(model_.node_count());
+
+  for (int c = 0; c < 3; ++c) {
+    Component& comp = components_[c];
+    comp.rows.clear();
+    std::set<Index> claimed;
+    for (std::size_t s = 0; s < sets_.size(); ++s) {
+      NodalConstraints& set = *sets_[s];
+      set.reactions.assign(set.nodes.size(), Vec3::Zero());
+      if (set.values.size() != set.nodes.size())
+        throw std::logic_error(fmt::format("constraint set \"{}\": {} values for {} nodes", set.name,
+                                           set.values.size(), set.nodes.size()));
+      if (!set.components[c]) continue;
+      for (std::size_t k = 0; k < set.nodes.size(); ++k)
+        if (claimed.insert(set.nodes[k]).second) comp.rows.push_back({s, k});
+    }
+    const auto m = static_cast<Eigen::Index>(comp.rows.size());
+    std::vector<Eigen::Triplet<double>> triplets;
+    for (Eigen::Index r = 0; r < m; ++r) {
+      const Index node = sets_[comp.rows[r].set]->nodes[comp.rows[r].entry];
+      for (std::int64_t k = psi.offsets[node]; k < psi.offsets[node + 1]; ++k)
+        triplets.emplace_back(r, psi.nodes[k], psi.values[k]);
+    }
+    comp.phi.resize(m, n);
+    comp.phi.setFromTriplets(triplets.begin(), triplets.end());
+    comp.residual.resize(m);
+    comp.y.resize(m);
+    if (m == 0) continue;
+    Eigen::SparseMatrix<double> phi_m = comp.phi;  // column-major copy, scaled by M^-1 column-wise
+    for (Eigen::Index j = 0; j < phi_m.outerSize(); ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(phi_m, j); it; ++it) it.valueRef() *= inverse_mass_[j];
+    const Eigen::SparseMatrix<double> phi_t = Eigen::SparseMatrix<double>(comp.phi).transpose();
+    const Eigen::SparseMatrix<double> a = phi_m * phi_t;
+    comp.factor.compute(a);
+    if (comp.factor.info() != Eigen::Success)
+      throw InputError("/boundaries",
+                       fmt::format("the constrained nodes of component {} cannot all be prescribed independently "
+                                   "(the constraint matrix is singular): are two constraint sets prescribing "
+                                   "coincident nodes?",
+                                   "xyz"[c]));
+  }
+}
+
+void ConstraintSystem::enforce(std::span<double> u, double alpha) {
+  for (int c = 0; c < 3; ++c) {
+    Component& comp = components_[c];
+    const auto m = static_cast<Eigen::Index>(comp.rows.size());
+    if (m == 0) continue;
+    for (Eigen::Index r = 0; r < m; ++r) {
+      double phi_u = 0.0;
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
+        phi_u += it.value() * u[3 * static_cast<std::size_t>(it.col()) + c];
+      const auto& row = comp.rows[r];
+      comp.residual[r] = sets_[row.set]->values[row.entry][c] - phi_u;
+    }
+    comp.y = comp.factor.solve(comp.residual);
+    for (Eigen::Index r = 0; r < m; ++r) {
+      const double yr = comp.y[r];
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
+        u[3 * static_cast<std::size_t>(it.col()) + c] += inverse_mass_[it.col()] * it.value() * yr;
+      const auto& row = comp.rows[r];
+      sets_[row.set]->reactions[row.entry][c] = yr / alpha;
+    }
+  }
+}
+
+Index ConstraintSystem::constrained_count() const {
+  std::size_t count = 0;
+  for (const auto& comp : components_) count += comp.rows.size();
+  return static_cast<Index>(count);
+}
+
+}  // namespace mtled

@@ -1,0 +1,185 @@
+#include "mtled/mesh.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace mtled {
+
+double tet_volume(const TetMesh& mesh, Index t) {
+  const auto& tet = mesh.tets[static_cast<std::size_t>(t)];
+  const Vec3& a = mesh.points[tet[0]];
+  return (mesh.points[tet[1]] - a).dot((mesh.points[tet[2]] - a).cross(mesh.points[tet[3]] - a)) / 6.0;
+}
+
+void remove_unused_nodes(TetMesh& mesh) {
+  std::vector<Index> new_index(mesh.points.size(), -1);
+  Index next = 0;
+  for (auto& tet : mesh.tets) {
+    for (auto& v : tet) {
+      if (v < 0 || static_cast<std::size_t>(v) >= mesh.points.size()) continue;  // check_mesh reports it
+      if (new_index[v] < 0) new_index[v] = next++;
+    }
+  }
+  if (static_cast<std::size_t>(next) == mesh.points.size()) {
+    bool identity = true;
+    for (std::size_t i = 0; i < new_index.size() && identity; ++i) identity = new_index[i] == static_cast<Index>(i);
+    if (identity) return;
+  }
+  // Keep the original relative order of the nodes (it carries the generator's locality).
+  std::vector<Index> order;
+  for (std::size_t i = 0; i < new_index.size(); ++i)
+    if (new_index[i] >= 0) order.push_back(static_cast<Index>(i));
+  next = 0;
+  for (Index old : order) new_index[old] = next++;
+  std::vector<Vec3> points;
+  points.reserve(order.size());
+  for (Index old : order) points.push_back(mesh.points[old]);
+  for (auto& tet : mesh.tets)
+    for (auto& v : tet)
+      if (v >= 0 && static_cast<std::size_t>(v) < new_index.size()) v = new_index[v];
+  for (auto& [name, nodes] : mesh.node_sets) {
+    std::vector<Index> kept;
+    for (Index n : nodes)
+      if (n >= 0 && static_cast<std::size_t>(n) < new_index.size() && new_index[n] >= 0) kept.push_back(new_index[n]);
+    nodes = std::move(kept);
+  }
+  mesh.points = std::move(points);
+}
+
+void check_mesh(TetMesh& mesh, bool fix_orientation) {
+  std::vector<Problem> problems;
+  const std::string& where = mesh.source;
+  if (mesh.tets.empty()) throw InputError(where, "the mesh has no tetrahedra (mtled needs a volume mesh of 4-node tets)");
+  for (std::size_t i = 0; i < mesh.points.size(); ++i) {
+    if (!mesh.points[i].allFinite()) {
+      problems.push_back({where, fmt::format("node {} has non-finite coordinates", i)});
+      if (problems.size() > 10) break;
+    }
+  }
+  const Index n = mesh.node_count();
+  for (std::size_t t = 0; t < mesh.tets.size() && problems.size() <= 10; ++t) {
+    for (Index v : mesh.tets[t]) {
+      if (v < 0 || v >= n) {
+        problems.push_back({where, fmt::format("tet {} refers to node {}, outside 0..{}", t, v, n - 1)});
+        break;
+      }
+    }
+  }
+  if (mesh.tet_region.size() != mesh.tets.size()) mesh.tet_region.assign(mesh.tets.size(), 0);
+  if (mesh.region_names.empty()) mesh.region_names.push_back("all");
+  if (!problems.empty()) throw InputError(std::move(problems));
+
+  // A volume is "zero" relative to the cube of the mesh's mean edge length.
+  double mean_edge = 0.0;
+  for (const auto& tet : mesh.tets) mean_edge += (mesh.points[tet[1]] - mesh.points[tet[0]]).norm();
+  mean_edge /= static_cast<double>(mesh.tets.size());
+  const double zero_volume = 1e-12 * mean_edge * mean_edge * mean_edge;
+  std::size_t inverted = 0, degenerate = 0;
+  for (Index t = 0; t < mesh.tet_count(); ++t) {
+    const double v = tet_volume(mesh, t);
+    if (!(std::abs(v) > zero_volume)) {
+      if (++degenerate <= 5) {
+        const auto& tet = mesh.tets[t];
+        problems.push_back({where, fmt::format("tet {} (nodes {}) has zero volume ({:.3g} m^3): remove it or re-mesh",
+                                               t, fmt::join(tet, " "), v)});
+      }
+    } else if (v < 0.0) {
+      ++inverted;
+      if (fix_orientation) {
+        std::swap(mesh.tets[t][2], mesh.tets[t][3]);
+      } else if (inverted <= 5) {
+        problems.push_back({where, fmt::format("tet {} is inverted (negative volume {:.3g} m^3)", t, v)});
+      }
+    }
+  }
+  if (degenerate > 5) problems.push_back({where, fmt::format("... {} zero-volume tets in all", degenerate)});
+  if (!problems.empty()) throw InputError(std::move(problems));
+}
+
+std::vector<char> surface_nodes(const TetMesh& mesh) {
+  // A face is on the boundary when exactly one tet uses it. Faces are keyed by their sorted vertices.
+  struct Key {
+    Index a, b, c;
+    bool operator==(const Key& o) const { return a == o.a && b == o.b && c == o.c; }
+  };
+  struct Hash {
+    std::size_t operator()(const Key& k) const {
+      return (static_cast<std::size_t>(k.a) * 73856093u) ^ (static_cast<std::size_t>(k.b) * 19349663u) ^
+             (static_cast<std::size_t>(k.c) * 83492791u);
+    }
+  };
+  std::unordered_map<Key, int, Hash> count;
+  count.reserve(mesh.tets.size() * 3);
+  static constexpr int kFaces[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
+  for (const auto& tet : mesh.tets) {
+    for (const auto& f : kFaces) {
+      std::array<Index, 3> v{tet[f[0]], tet[f[1]], tet[f[2]]};
+      std::sort(v.begin(), v.end());
+      ++count[Key{v[0], v[1], v[2]}];
+    }
+  }
+  std::vector<char> surface(mesh.points.size(), 0);
+  for (const auto& [key, c] : count) {
+    if (c == 1) surface[key.a] = surface[key.b] = surface[key.c] = 1;
+  }
+  return surface;
+}
+
+std::vector<double> mean_edge_length_at_nodes(const TetMesh& mesh) {
+  // Each edge is shared by several tets; counting it once per tet weights edges by their tet count, which is
+  // what "the edges that meet at the node" means for a mean over the node's neighbourhood volume.
+  std::vector<double> sum(mesh.points.size(), 0.0);
+  std::vector<int> count(mesh.points.size(), 0);
+  static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  for (const auto& tet : mesh.tets) {
+    for (const auto& e : kEdges) {
+      const double length = (mesh.points[tet[e[0]]] - mesh.points[tet[e[1]]]).norm();
+      sum[tet[e[0]]] += length;
+      sum[tet[e[1]]] += length;
+      ++count[tet[e[0]]];
+      ++count[tet[e[1]]];
+    }
+  }
+  for (std::size_t i = 0; i < sum.size(); ++i) sum[i] = count[i] > 0 ? sum[i] / count[i] : 0.0;
+  return sum;
+}
+
+std::vector<Index> select_nodes(const NodeSelector& selector, const TetMesh& mesh, const std::vector<char>& surface,
+                                const std::string& pointer) {
+  std::vector<Index> nodes;
+  if (selector.kind == NodeSelector::Kind::group) {
+    const auto it = mesh.node_sets.find(selector.group);
+    if (it == mesh.node_sets.end()) {
+      std::vector<std::string> names;
+      for (const auto& [name, set] : mesh.node_sets) names.push_back(name);
+      std::string message = fmt::format("the mesh ({}) has no node set \"{}\"", mesh.source, selector.group);
+      const auto hint = did_you_mean(selector.group, names);
+      message += hint.empty() ? (names.empty() ? "; it has no named node sets: select nodes by geometry instead"
+                                               : fmt::format("; it has: {}", fmt::join(names, ", ")))
+                              : "; " + hint;
+      throw InputError(pointer + "/group", message);
+    }
+    for (Index n : it->second)
+      if (!selector.surface_only || surface[n]) nodes.push_back(n);
+  } else {
+    Vec3 lo = mesh.points.front(), hi = lo;
+    for (const auto& p : mesh.points) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const double tol = selector.tolerance.value_or(1e-6 * (hi - lo).norm());
+    for (Index i = 0; i < mesh.node_count(); ++i) {
+      if (selector.surface_only && !surface[i]) continue;
+      if (selector.contains(mesh.points[i], tol)) nodes.push_back(i);
+    }
+  }
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  return nodes;
+}
+
+}  // namespace mtled

@@ -1,0 +1,326 @@
+#include "mtled/model.hpp"
+
+#include <fmt/format.h>
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "mtled/log.hpp"
+
+namespace mtled {
+
+namespace {
+
+// 4-point rule on a tet, exact for quadratics: barycentric (a, b, b, b) and permutations, weight V/4.
+constexpr double kQuadA = 0.5854101966249685;
+constexpr double kQuadB = 0.1381966011250105;
+
+std::string point_text(const Vec3& x) { return fmt::format("({:.6g}, {:.6g}, {:.6g}) m", x[0], x[1], x[2]); }
+
+struct RowFailure {
+  Index row = std::numeric_limits<Index>::max();
+  std::string message;
+};
+
+}  // namespace
+
+Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
+             std::vector<std::shared_ptr<const Material>> region_materials, Options options)
+    : mesh_(std::move(mesh)), shape_functions_(std::move(shape_functions)), materials_(std::move(region_materials)) {
+  if (materials_.size() != mesh_.region_names.size())
+    throw std::logic_error("Model: one material per mesh region is required");
+  if (materials_.size() > std::numeric_limits<std::uint16_t>::max())
+    throw InputError(mesh_.source, "more than 65535 material regions");
+  surface_ = surface_nodes(mesh_);
+  spacing_ = mean_edge_length_at_nodes(mesh_);
+  const double dilatation = shape_functions_->support_dilatation();
+  radius_.resize(spacing_.size());
+  for (std::size_t i = 0; i < spacing_.size(); ++i) radius_[i] = dilatation * spacing_[i];
+  max_radius_ = *std::max_element(radius_.begin(), radius_.end());
+  Vec3 lo = mesh_.points.front(), hi = lo;
+  for (const auto& p : mesh_.points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  length_scale_ = (hi - lo).norm();
+  node_search_ = std::make_unique<PointSearch>(mesh_.points);
+
+  build_integration_points(options.integration_points_per_tet);
+  build_supports();
+  build_time_steps();
+  thread_forces_.resize(static_cast<std::size_t>(omp_get_max_threads()));
+  for (auto& buffer : thread_forces_) buffer.assign(3 * static_cast<std::size_t>(node_count()), 0.0);
+}
+
+Model::~Model() = default;
+
+void Model::build_integration_points(int points_per_tet) {
+  if (points_per_tet != 1 && points_per_tet != 4)
+    throw InputError("/discretisation/integration_points_per_tet", "must be 1 or 4");
+  const std::size_t count = mesh_.tets.size() * static_cast<std::size_t>(points_per_tet);
+  ip_position_.reserve(count);
+  ip_weight_.reserve(count);
+  ip_tet_.reserve(count);
+  ip_material_.reserve(count);
+  for (Index t = 0; t < mesh_.tet_count(); ++t) {
+    const auto& tet = mesh_.tets[t];
+    const double volume = tet_volume(mesh_, t);
+    const Vec3* v[4] = {&mesh_.points[tet[0]], &mesh_.points[tet[1]], &mesh_.points[tet[2]], &mesh_.points[tet[3]]};
+    const auto material = static_cast<std::uint16_t>(mesh_.tet_region[t]);
+    if (points_per_tet == 1) {
+      ip_position_.push_back((*v[0] + *v[1] + *v[2] + *v[3]) / 4.0);
+      ip_weight_.push_back(volume);
+      ip_tet_.push_back(t);
+      ip_material_.push_back(material);
+    } else {
+      for (int k = 0; k < 4; ++k) {
+        Vec3 x = Vec3::Zero();
+        for (int j = 0; j < 4; ++j) x += (j == k ? kQuadA : kQuadB) * *v[j];
+        ip_position_.push_back(x);
+        ip_weight_.push_back(volume / 4.0);
+        ip_tet_.push_back(t);
+        ip_material_.push_back(material);
+      }
+    }
+  }
+}
+
+void Model::build_supports() {
+  const int needed = shape_functions_->minimum_support_size();
+  // Rows for integration points (gradients) and for the nodes themselves (values, for interpolation).
+  auto build = [&](const std::vector<Vec3>& points, bool gradients, const char* what, SupportRows& rows,
+                   SupportStatistics* stats) {
+    const Index n = static_cast<Index>(points.size());
+    std::vector<std::vector<Index>> support(points.size());
+    std::vector<RowFailure> failures(static_cast<std::size_t>(omp_get_max_threads()));
+#pragma omp parallel
+    {
+      std::vector<Index> candidates;
+      RowFailure& failure = failures[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+      for (Index r = 0; r < n; ++r) {
+        node_search_->within(points[r], max_radius_, candidates);
+        auto& s = support[r];
+        for (Index i : candidates)
+          if ((mesh_.points[i] - points[r]).norm() < radius_[i]) s.push_back(i);
+        std::sort(s.begin(), s.end());
+        if (static_cast<int>(s.size()) < needed && r < failure.row) {
+          failure.row = r;
+          failure.message = fmt::format(
+              "{} {} at {} lies in the support of only {} nodes; the shape functions need at least {}. Increase "
+              "/shape_function/support_dilatation (now {:g}) or use a finer, more even mesh",
+              what, r, point_text(points[r]), s.size(), needed, shape_functions_->support_dilatation());
+        }
+      }
+    }
+    for (const auto& f : failures)
+      if (f.row != std::numeric_limits<Index>::max()) throw InputError("/shape_function", f.message);
+
+    rows.offsets.assign(points.size() + 1, 0);
+    for (Index r = 0; r < n; ++r) rows.offsets[r + 1] = rows.offsets[r] + static_cast<std::int64_t>(support[r].size());
+    const auto total = static_cast<std::size_t>(rows.offsets.back());
+    rows.nodes.resize(total);
+    if (gradients) {
+      rows.gradients.resize(3 * total);
+    } else {
+      rows.values.resize(total);
+    }
+    std::vector<double> min_condition(static_cast<std::size_t>(omp_get_max_threads()), 1.0);
+#pragma omp parallel
+    {
+      std::vector<Vec3> coordinates, grads;
+      std::vector<double> radii, values;
+      RowFailure& failure = failures[static_cast<std::size_t>(omp_get_thread_num())];
+      double& condition = min_condition[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+      for (Index r = 0; r < n; ++r) {
+        const auto& s = support[r];
+        coordinates.resize(s.size());
+        radii.resize(s.size());
+        values.resize(s.size());
+        grads.resize(gradients ? s.size() : 0);
+        for (std::size_t k = 0; k < s.size(); ++k) {
+          coordinates[k] = mesh_.points[s[k]];
+          radii[k] = radius_[s[k]];
+        }
+        const ShapeFunctionFit fit = shape_functions_->evaluate(points[r], coordinates, radii, values, grads);
+        condition = std::min(condition, fit.reciprocal_condition);
+        if (!fit.ok && r < failure.row) {
+          failure.row = r;
+          failure.message = fmt::format(
+              "the shape functions cannot be built at {} {} at {}: its {} support nodes are too few or nearly "
+              "coplanar (reciprocal condition {:.2g}). Increase /shape_function/support_dilatation (now {:g})",
+              what, r, point_text(points[r]), s.size(), fit.reciprocal_condition,
+              shape_functions_->support_dilatation());
+        }
+        const auto start = static_cast<std::size_t>(rows.offsets[r]);
+        for (std::size_t k = 0; k < s.size(); ++k) {
+          rows.nodes[start + k] = s[k];
+          if (gradients) {
+            for (int d = 0; d < 3; ++d) rows.gradients[3 * (start + k) + d] = grads[k][d];
+          } else {
+            rows.values[start + k] = values[k];
+          }
+        }
+      }
+    }
+    for (const auto& f : failures)
+      if (f.row != std::numeric_limits<Index>::max()) throw InputError("/shape_function", f.message);
+    if (stats != nullptr) {
+      stats->min = std::numeric_limits<Index>::max();
+      stats->max = 0;
+      for (Index r = 0; r < n; ++r) {
+        const auto size = static_cast<Index>(rows.size(r));
+        stats->min = std::min(stats->min, size);
+        stats->max = std::max(stats->max, size);
+      }
+      stats->mean = static_cast<double>(total) / std::max<Index>(n, 1);
+      stats->min_reciprocal_condition = *std::min_element(min_condition.begin(), min_condition.end());
+    }
+  };
+  build(ip_position_, true, "integration point", ip_rows_, &ip_stats_);
+  build(mesh_.points, false, "node", node_rows_, nullptr);
+
+  // Every node must carry mass: it must lie in the support of some integration point.
+  std::vector<char> used(mesh_.points.size(), 0);
+  for (Index i : ip_rows_.nodes) used[i] = 1;
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    if (!used[i])
+      throw InputError("/shape_function",
+                       fmt::format("node {} at {} is in the support of no integration point and would have no mass; "
+                                   "increase /shape_function/support_dilatation",
+                                   i, point_text(mesh_.points[i])));
+  }
+}
+
+void Model::build_time_steps() {
+  const Index n = integration_point_count();
+  ip_dt_.resize(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+  for (Index ip = 0; ip < n; ++ip) {
+    double sum = 0.0;
+    for (std::int64_t k = ip_rows_.offsets[ip]; k < ip_rows_.offsets[ip + 1]; ++k) {
+      const double* g = &ip_rows_.gradients[3 * k];
+      sum += g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+    }
+    const Material& material = ip_material(ip);
+    const double wave_speed = std::sqrt(material.p_wave_modulus() / material.density());
+    ip_dt_[ip] = 2.0 / (wave_speed * std::sqrt(static_cast<double>(ip_rows_.size(ip)) * sum));
+  }
+}
+
+std::vector<double> Model::lumped_mass(std::span<const double> density_scale) const {
+  std::vector<double> mass(static_cast<std::size_t>(node_count()), 0.0);
+  for (Index ip = 0; ip < integration_point_count(); ++ip) {
+    const double scale = density_scale.empty() ? 1.0 : density_scale[ip];
+    const double share = scale * ip_material(ip).density() * ip_weight_[ip] / static_cast<double>(ip_rows_.size(ip));
+    for (std::int64_t k = ip_rows_.offsets[ip]; k < ip_rows_.offsets[ip + 1]; ++k) mass[ip_rows_.nodes[k]] += share;
+  }
+  return mass;
+}
+
+Mat3 Model::deformation_gradient(Index ip, std::span<const double> u) const {
+  Mat3 F = Mat3::Identity();
+  for (std::int64_t k = ip_rows_.offsets[ip]; k < ip_rows_.offsets[ip + 1]; ++k) {
+    const double* g = &ip_rows_.gradients[3 * k];
+    const double* ui = &u[3 * static_cast<std::size_t>(ip_rows_.nodes[k])];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) F(a, b) += ui[a] * g[b];
+  }
+  return F;
+}
+
+Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
+  const Index n = integration_point_count();
+  const std::size_t dofs = 3 * static_cast<std::size_t>(node_count());
+  Index first_bad = std::numeric_limits<Index>::max();
+#pragma omp parallel reduction(min : first_bad)
+  {
+    std::vector<double>& local = thread_forces_[static_cast<std::size_t>(omp_get_thread_num())];
+    std::fill(local.begin(), local.end(), 0.0);
+#pragma omp for schedule(static)
+    for (Index ip = 0; ip < n; ++ip) {
+      const std::int64_t begin = ip_rows_.offsets[ip], end = ip_rows_.offsets[ip + 1];
+      const Index* nodes = ip_rows_.nodes.data();
+      const double* grads = ip_rows_.gradients.data();
+      Mat3 F = Mat3::Identity();
+      for (std::int64_t k = begin; k < end; ++k) {
+        const double* g = grads + 3 * k;
+        const double* ui = u.data() + 3 * static_cast<std::size_t>(nodes[k]);
+        for (int a = 0; a < 3; ++a) {
+          F(a, 0) += ui[a] * g[0];
+          F(a, 1) += ui[a] * g[1];
+          F(a, 2) += ui[a] * g[2];
+        }
+      }
+      Mat3 S;
+      if (!ip_material(ip).stress(F, S)) {
+        first_bad = std::min(first_bad, ip);
+        continue;
+      }
+      const Mat3 P = ip_weight_[ip] * (F * S);  // first Piola-Kirchhoff stress times the weight
+      for (std::int64_t k = begin; k < end; ++k) {
+        const double* g = grads + 3 * k;
+        double* fi = local.data() + 3 * static_cast<std::size_t>(nodes[k]);
+        for (int a = 0; a < 3; ++a) fi[a] += P(a, 0) * g[0] + P(a, 1) * g[1] + P(a, 2) * g[2];
+      }
+    }
+    // Reduce the per-thread buffers in a fixed order, each thread summing its own slice of the forces.
+    const auto team = static_cast<std::size_t>(omp_get_num_threads());
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < dofs; ++i) {
+      double sum = 0.0;
+      for (std::size_t t = 0; t < team; ++t) sum += thread_forces_[t][i];
+      f[i] = sum;
+    }
+  }
+  return first_bad == std::numeric_limits<Index>::max() ? -1 : first_bad;
+}
+
+double Model::strain_energy(std::span<const double> u) const {
+  const Index n = integration_point_count();
+  double energy = 0.0;
+#pragma omp parallel for schedule(static) reduction(+ : energy)
+  for (Index ip = 0; ip < n; ++ip) energy += ip_weight_[ip] * ip_material(ip).energy(deformation_gradient(ip, u));
+  return energy;
+}
+
+void Model::interpolate(std::span<const double> u, std::span<double> out) const {
+  const Index n = node_count();
+#pragma omp parallel for schedule(static)
+  for (Index j = 0; j < n; ++j) {
+    const Vec3 v = interpolate_node(j, u);
+    for (int d = 0; d < 3; ++d) out[3 * static_cast<std::size_t>(j) + d] = v[d];
+  }
+}
+
+Vec3 Model::interpolate_node(Index node, std::span<const double> u) const {
+  Vec3 v = Vec3::Zero();
+  for (std::int64_t k = node_rows_.offsets[node]; k < node_rows_.offsets[node + 1]; ++k) {
+    const double* ui = &u[3 * static_cast<std::size_t>(node_rows_.nodes[k])];
+    v += node_rows_.values[k] * Vec3(ui[0], ui[1], ui[2]);
+  }
+  return v;
+}
+
+bool Model::shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values) const {
+  std::vector<Index> candidates;
+  node_search_->within(x, max_radius_, candidates);
+  nodes.clear();
+  for (Index i : candidates)
+    if ((mesh_.points[i] - x).norm() < radius_[i]) nodes.push_back(i);
+  std::sort(nodes.begin(), nodes.end());
+  if (static_cast<int>(nodes.size()) < shape_functions_->minimum_support_size()) return false;
+  std::vector<Vec3> coordinates(nodes.size());
+  std::vector<double> radii(nodes.size());
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    coordinates[k] = mesh_.points[nodes[k]];
+    radii[k] = radius_[nodes[k]];
+  }
+  values.resize(nodes.size());
+  return shape_functions_->evaluate(x, coordinates, radii, values, {}).ok;
+}
+
+}  // namespace mtled

@@ -1,0 +1,395 @@
+#include "mtled/scene.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace fs = std::filesystem;
+
+namespace mtled {
+
+namespace {
+
+// Records the line of every value of an already syntax-checked JSON text, keyed by JSON pointer.
+class LineScanner {
+ public:
+  LineScanner(const std::string& text, std::map<std::string, int>& lines) : text_(text), lines_(lines) {}
+  void scan() {
+    skip();
+    value("");
+  }
+
+ private:
+  void skip() {
+    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) {
+      if (text_[pos_] == '\n') ++line_;
+      ++pos_;
+    }
+  }
+  std::string string_token() {
+    std::string out;
+    ++pos_;  // opening quote
+    while (pos_ < text_.size() && text_[pos_] != '"') {
+      if (text_[pos_] == '\\' && pos_ + 1 < text_.size()) {
+        ++pos_;
+        switch (text_[pos_]) {
+          case 'n': out += '\n'; break;
+          case 't': out += '\t'; break;
+          case 'u': out += '?'; pos_ += 4; break;  // keys with \u escapes are not worth exact lines
+          default: out += text_[pos_];
+        }
+      } else {
+        out += text_[pos_];
+      }
+      ++pos_;
+    }
+    ++pos_;  // closing quote
+    return out;
+  }
+  void value(const std::string& pointer) {
+    skip();
+    if (pos_ >= text_.size()) return;
+    lines_.emplace(pointer, line_);
+    const char c = text_[pos_];
+    if (c == '{') {
+      ++pos_;
+      skip();
+      while (pos_ < text_.size() && text_[pos_] != '}') {
+        const int key_line = line_;
+        const std::string key = string_token();
+        skip();
+        ++pos_;  // ':'
+        const std::string child = pointer + "/" + pointer_escape(key);
+        value(child);
+        lines_[child] = key_line;  // the key's line reads best in messages
+        skip();
+        if (pos_ < text_.size() && text_[pos_] == ',') ++pos_;
+        skip();
+      }
+      ++pos_;
+    } else if (c == '[') {
+      ++pos_;
+      skip();
+      for (int i = 0; pos_ < text_.size() && text_[pos_] != ']'; ++i) {
+        value(pointer + "/" + std::to_string(i));
+        skip();
+        if (pos_ < text_.size() && text_[pos_] == ',') ++pos_;
+        skip();
+      }
+      ++pos_;
+    } else if (c == '"') {
+      string_token();
+    } else {
+      while (pos_ < text_.size() && !std::isspace(static_cast<unsigned char>(text_[pos_])) && text_[pos_] != ',' &&
+             text_[pos_] != '}' && text_[pos_] != ']')
+        ++pos_;
+    }
+  }
+
+  const std::string& text_;
+  std::map<std::string, int>& lines_;
+  std::size_t pos_ = 0;
+  int line_ = 1;
+};
+
+std::string json_type(const json& v) { return v.is_number_integer() ? "integer" : v.type_name(); }
+
+}  // namespace
+
+fs::path SceneDocument::directory() const { return file.empty() ? fs::current_path() : file.parent_path(); }
+
+std::string SceneDocument::locate(const std::string& pointer) const {
+  for (const auto& o : overrides)
+    if (pointer == o || pointer.rfind(o + "/", 0) == 0) return "--set " + pointer;
+  std::string p = pointer;
+  while (true) {
+    const auto it = lines.find(p);
+    if (it != lines.end()) return fmt::format("{}:{}: {}", name, it->second, pointer.empty() ? "/" : pointer);
+    if (p.empty()) break;
+    p = p.substr(0, p.rfind('/'));
+  }
+  return fmt::format("{}: {}", name, pointer);
+}
+
+SceneDocument parse_scene(const std::string& text, const std::string& name, const std::vector<std::string>& overrides) {
+  SceneDocument document;
+  document.name = name;
+  try {
+    document.root = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // nlohmann's message: "[json.exception.parse_error.101] parse error at line L, column C: <what>"
+    std::string message = e.what();
+    std::smatch m;
+    static const std::regex located(R"(parse error at line (\d+), column (\d+): (.*))");
+    std::string where = name;
+    if (std::regex_search(message, m, located)) {
+      where = fmt::format("{}:{}:{}", name, m[1].str(), m[2].str());
+      message = m[3].str();
+    }
+    std::string hint = "check for a missing comma, quote or bracket";
+    if (message.find("end of input") != std::string::npos)
+      hint = "the file ends early: is it truncated, or is a closing '}' or ']' missing?";
+    throw InputError(where, fmt::format("invalid JSON: {} ({})", message, hint));
+  }
+  if (!document.root.is_object()) throw InputError(name, "a scene must be a JSON object { ... }");
+  LineScanner(text, document.lines).scan();
+  for (const auto& o : overrides) apply_override(document, o);
+  return document;
+}
+
+SceneDocument read_scene(const fs::path& file, const std::vector<std::string>& overrides) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), "cannot read the scene file (does it exist, and is it readable?)");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  SceneDocument document = parse_scene(buffer.str(), file.filename().string(), overrides);
+  document.file = fs::absolute(file);
+  return document;
+}
+
+void apply_override(SceneDocument& document, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (assignment.empty() || assignment[0] != '/' || eq == std::string::npos)
+    throw InputError("--set " + assignment,
+                     "expected /json/pointer=value, for example --set /needle/depth=0.005");
+  const std::string pointer = assignment.substr(0, eq);
+  const std::string text = assignment.substr(eq + 1);
+  json value;
+  try {
+    value = json::parse(text);
+  } catch (const json::parse_error&) {
+    value = text;  // bare words are strings: --set /shape_function/type=mls
+  }
+  try {
+    const json::json_pointer ptr(pointer);
+    const json::json_pointer parent = ptr.parent_pointer();
+    if (!parent.empty() && !document.root.contains(parent))
+      throw InputError("--set " + pointer, fmt::format("the scene has nothing at {}", parent.to_string()));
+    document.root[ptr] = value;
+  } catch (const json::exception& e) {
+    throw InputError("--set " + pointer, fmt::format("cannot set this pointer: {}", e.what()));
+  }
+  document.overrides.push_back(pointer);
+}
+
+std::vector<fs::path> scene_plugin_paths(const SceneDocument& document) {
+  std::vector<fs::path> paths;
+  const auto it = document.root.find("plugin_paths");
+  if (it == document.root.end() || !it->is_array()) return paths;
+  for (const auto& p : *it) {
+    if (!p.is_string()) continue;
+    fs::path path(p.get<std::string>());
+    paths.push_back(path.is_absolute() ? path : document.directory() / path);
+  }
+  return paths;
+}
+
+const ComponentDeclaration& discretisation_declaration() {
+  static const ComponentDeclaration declaration = [] {
+    ComponentDeclaration d("discretisation", Category::scene);
+    d.summary("How the mesh becomes a meshless model: integration points per background tet.");
+    d.integer("integration_points_per_tet")
+        .defaults(1)
+        .choices({1, 4})
+        .unit("1")
+        .doc("integration points in each background tet: 1 at the centroid (the paper's choice) or a 4-point "
+             "rule exact for quadratics");
+    return d;
+  }();
+  return declaration;
+}
+
+const ComponentDeclaration& output_declaration() {
+  static const ComponentDeclaration declaration = [] {
+    ComponentDeclaration d("output", Category::scene);
+    d.summary("What a run writes besides summary.json and result.vtu.");
+    d.integer("every_steps")
+        .defaults(0)
+        .non_negative()
+        .unit("1")
+        .doc("write steps/NNNNNN.vtu and series.pvd every this many steps; 0 writes the final state only");
+    d.integer("history_every_steps")
+        .defaults(20)
+        .at_least(1)
+        .unit("1")
+        .doc("add a row to needle.csv and reactions.csv every this many steps (and at the last step)");
+    d.string_list("cell_data")
+        .defaults(json::array())
+        .choices({"green_strain", "cauchy_stress", "von_mises_stress", "jacobian"})
+        .doc("per-cell fields in result.vtu, evaluated at each tet's integration points (averaged)");
+    return d;
+  }();
+  return declaration;
+}
+
+namespace {
+
+struct Validator {
+  PluginCatalog& catalog;
+  std::vector<Problem> problems;
+
+  std::optional<ComponentBlock> component(const json& block, const std::string& pointer, Category category) {
+    if (!block.is_object()) {
+      problems.push_back({pointer, fmt::format("expected an object {{\"type\": \"<{} name>\", ...}}, got {}",
+                                               to_string(category), json_type(block))});
+      return std::nullopt;
+    }
+    const auto type = block.find("type");
+    if (type == block.end() || !type->is_string()) {
+      const auto names = catalog.names(category);
+      problems.push_back({pointer + "/type", fmt::format("every {} needs a \"type\" naming its component (available: {})",
+                                                         to_string(category), fmt::join(names, ", "))});
+      return std::nullopt;
+    }
+    const std::string name = type->get<std::string>();
+    const ComponentDeclaration* declaration = nullptr;
+    try {
+      declaration = &catalog.load(category, name, pointer + "/type");
+    } catch (const InputError& e) {
+      problems.insert(problems.end(), e.problems().begin(), e.problems().end());
+      return std::nullopt;
+    }
+    Parameters parameters = validate_parameters(*declaration, block, pointer, problems);
+    return ComponentBlock{name, std::move(parameters)};
+  }
+
+  std::vector<ComponentBlock> component_list(const json& root, const std::string& key, Category category,
+                                             bool required) {
+    std::vector<ComponentBlock> list;
+    const auto it = root.find(key);
+    if (it == root.end()) {
+      if (required)
+        problems.push_back({"/" + key, fmt::format("missing \"{}\": a list of {} blocks", key, to_string(category))});
+      return list;
+    }
+    if (!it->is_array() || (required && it->empty())) {
+      problems.push_back({"/" + key, fmt::format("expected a {}list of {} blocks, got {}", required ? "non-empty " : "",
+                                                 to_string(category), json_type(*it))});
+      return list;
+    }
+    for (std::size_t i = 0; i < it->size(); ++i) {
+      if (auto block = component((*it)[i], fmt::format("/{}/{}", key, i), category)) list.push_back(std::move(*block));
+    }
+    return list;
+  }
+};
+
+const std::vector<std::string>& top_level_keys() {
+  static const std::vector<std::string> keys = {"$schema",   "description", "plugin_paths",   "mesh",
+                                                "shape_function", "materials", "boundaries", "needle",
+                                                "integrator", "discretisation", "output"};
+  return keys;
+}
+
+}  // namespace
+
+Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
+  Validator v{catalog, {}};
+  const json& root = document.root;
+  for (const auto& [key, value] : root.items()) {
+    const auto& keys = top_level_keys();
+    if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
+    const auto hint = did_you_mean(key, keys);
+    v.problems.push_back({"/" + pointer_escape(key),
+                          fmt::format("unknown top-level key \"{}\"; {}", key,
+                                      hint.empty() ? fmt::format("allowed: {}", fmt::join(keys, ", ")) : hint)});
+  }
+  if (root.contains("description") && !root["description"].is_string())
+    v.problems.push_back({"/description", "expected a string"});
+  if (root.contains("plugin_paths")) {
+    const json& paths = root["plugin_paths"];
+    if (!paths.is_array()) {
+      v.problems.push_back({"/plugin_paths", "expected a list of folder names"});
+    } else {
+      for (std::size_t i = 0; i < paths.size(); ++i)
+        if (!paths[i].is_string()) v.problems.push_back({fmt::format("/plugin_paths/{}", i), "expected a folder name"});
+    }
+  }
+  for (const auto& duplicate : catalog.duplicates()) v.problems.push_back(duplicate);
+
+  Scene scene;
+  auto required = [&](const std::string& key, Category category) -> ComponentBlock {
+    const auto it = root.find(key);
+    if (it == root.end()) {
+      v.problems.push_back({"/" + key, fmt::format("missing \"{}\" (available {} types: {})", key, to_string(category),
+                                                   fmt::join(catalog.names(category), ", "))});
+      return {};
+    }
+    return v.component(*it, "/" + key, category).value_or(ComponentBlock{});
+  };
+  scene.mesh = required("mesh", Category::mesh);
+  scene.shape_function = required("shape_function", Category::shape_function);
+  scene.materials = v.component_list(root, "materials", Category::material, true);
+  scene.boundaries = v.component_list(root, "boundaries", Category::boundary, false);
+  if (root.contains("needle")) scene.needle = v.component(root["needle"], "/needle", Category::needle);
+  scene.integrator = required("integrator", Category::integrator);
+  const json empty = json::object();
+  scene.discretisation = validate_parameters(discretisation_declaration(), root.value("discretisation", empty),
+                                             "/discretisation", v.problems, {});
+  scene.output = validate_parameters(output_declaration(), root.value("output", empty), "/output", v.problems, {});
+
+  // At most one material may omit "region" (it fills every region the others leave).
+  int without_region = 0;
+  for (std::size_t i = 0; i < scene.materials.size(); ++i)
+    if (!scene.materials[i].parameters.has("region") && ++without_region == 2)
+      v.problems.push_back({fmt::format("/materials/{}", i),
+                            "two materials without \"region\": name the mesh region each one fills"});
+
+  if (!v.problems.empty()) {
+    for (auto& p : v.problems)
+      if (!p.where.empty() && p.where[0] == '/') p.where = document.locate(p.where);
+    throw InputError(std::move(v.problems));
+  }
+  scene.document = std::move(document);
+  return scene;
+}
+
+InputError locate_problems(const InputError& error, const SceneDocument& document) {
+  std::vector<Problem> problems = error.problems();
+  for (auto& p : problems)
+    if (!p.where.empty() && p.where[0] == '/') p.where = document.locate(p.where);
+  return InputError(std::move(problems));
+}
+
+json scene_json_schema(PluginCatalog& catalog) {
+  auto one_of = [&](Category category) {
+    json options = json::array();
+    for (const auto& name : catalog.names(category)) {
+      try {
+        options.push_back(catalog.load(category, name).to_json_schema());
+      } catch (const InputError&) {
+        // A plugin that cannot be loaded is left out of the schema; `mtled plugins` reports it.
+      }
+    }
+    return json{{"oneOf", options}};
+  };
+  json properties = {
+      {"$schema", {{"type", "string"}}},
+      {"description", {{"type", "string"}, {"description", "free text about the scene"}}},
+      {"plugin_paths",
+       {{"type", "array"}, {"items", {{"type", "string"}}}, {"description", "extra plugin folders, relative to the scene"}}},
+      {"mesh", one_of(Category::mesh)},
+      {"shape_function", one_of(Category::shape_function)},
+      {"materials", {{"type", "array"}, {"minItems", 1}, {"items", one_of(Category::material)}}},
+      {"boundaries", {{"type", "array"}, {"items", one_of(Category::boundary)}}},
+      {"needle", one_of(Category::needle)},
+      {"integrator", one_of(Category::integrator)},
+      {"discretisation", discretisation_declaration().to_json_schema()},
+      {"output", output_declaration().to_json_schema()}};
+  properties["discretisation"]["properties"].erase("type");
+  properties["output"]["properties"].erase("type");
+  properties["discretisation"]["required"] = json::array();
+  properties["output"]["required"] = json::array();
+  return {{"$schema", "https://json-schema.org/draft/2020-12/schema"},
+          {"$id", "https://mtled.org/schema/scene.json"},
+          {"title", "mtled scene"},
+          {"type", "object"},
+          {"properties", properties},
+          {"required", {"mesh", "shape_function", "materials", "integrator"}},
+          {"additionalProperties", false}};
+}
+
+}  // namespace mtled

@@ -1,0 +1,53 @@
+#pragma once
+// Helpers for the test suites: the build tree's plugins through the real loader, components built from
+// JSON parameter blocks, small structured meshes, and running the mtled executable.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "mtled/mesh.hpp"
+#include "mtled/plugin_catalog.hpp"
+
+namespace mtled::test {
+
+std::filesystem::path source_dir();
+std::filesystem::path binary_dir();
+std::filesystem::path plugin_dir();
+// A fresh, empty folder for a test's files (under the build tree).
+std::filesystem::path scratch_dir(const std::string& name);
+
+// One catalog over the build tree's plugin folder, shared by the whole test executable.
+PluginCatalog& catalog();
+
+// Validates `block` against the component's declaration (failing the test on any problem) and returns
+// the parameters.
+Parameters parameters(Category category, const std::string& name, const json& block);
+
+template <class Interface>
+std::shared_ptr<Interface> make(const std::string& name, const json& block) {
+  const Parameters p = parameters(Interface::category, name, block);
+  return catalog().create<Interface>(name, p);
+}
+
+// A box [0,a]x[0,b]x[0,c] split into n_x n_y n_z cubes of 6 tets each; interior nodes moved at random by up
+// to `jitter` times the cell size (seeded, repeatable). Node sets "x0", "x1", "y0", "y1", "z0", "z1" hold
+// the faces.
+TetMesh box_mesh(Vec3 size, int nx, int ny, int nz, double jitter = 0.0, unsigned seed = 1);
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+// Runs the mtled executable with `arguments`; `environment` entries are set for the child ("NAME=value";
+// "NAME=" unsets).
+CommandResult run_mtled(const std::vector<std::string>& arguments, const std::vector<std::string>& environment = {});
+
+// Reads a whole file / parses a JSON file.
+std::string read_text(const std::filesystem::path& file);
+json read_json(const std::filesystem::path& file);
+void write_text(const std::filesystem::path& file, const std::string& text);
+
+}  // namespace mtled::test
