@@ -1,10 +1,11 @@
-# mtled_add_plugin(CATEGORY category NAME name SOURCES src... [LINK_LIBRARIES libs...])
+# mtled_add_plugin(CATEGORY category NAME name SOURCES src... [LINK_LIBRARIES libs...]
+#                  [OUTPUT_DIRECTORY dir] [NO_INSTALL])
 #
 # Builds one mtled component as its own run-time-loaded module, `mtled-CATEGORY-NAME.so`. The file name is the
 # component: the kernel maps a scene's "type" to the file without loading anything else. Symbols are
 # hidden except the handshake and registration entry points exported by MTLED_PLUGIN (mtled/plugin.hpp).
 function(mtled_add_plugin)
-  cmake_parse_arguments(ARG "" "CATEGORY;NAME" "SOURCES;LINK_LIBRARIES" ${ARGN})
+  cmake_parse_arguments(ARG "NO_INSTALL" "CATEGORY;NAME;OUTPUT_DIRECTORY" "SOURCES;LINK_LIBRARIES" ${ARGN})
   set(name ${ARG_NAME})
   set(category ${ARG_CATEGORY})
   set(categories mesh shape_function material boundary needle integrator)
@@ -25,13 +26,18 @@ function(mtled_add_plugin)
     CXX_VISIBILITY_PRESET hidden
     VISIBILITY_INLINES_HIDDEN ON
     INSTALL_RPATH "$ORIGIN/../..")
-  if(TARGET mtled_core)
+  if(TARGET mtled_core)  # inside the mtled build
     target_link_libraries(${target} PRIVATE mtled_core mtled_warnings ${ARG_LINK_LIBRARIES})
-    set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${MTLED_PLUGIN_OUTPUT_DIR})
-    install(TARGETS ${target} LIBRARY DESTINATION ${MTLED_PLUGIN_INSTALL_DIR})
-    set_property(GLOBAL APPEND PROPERTY MTLED_PLUGIN_TARGETS ${target})
-  else()
+    if(NOT ARG_NO_INSTALL)
+      set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${MTLED_PLUGIN_OUTPUT_DIR})
+      install(TARGETS ${target} LIBRARY DESTINATION ${MTLED_PLUGIN_INSTALL_DIR})
+      set_property(GLOBAL APPEND PROPERTY MTLED_PLUGIN_TARGETS ${target})
+    endif()
+  else()  # a third-party plugin built against an installed mtled
     target_link_libraries(${target} PRIVATE mtled::core ${ARG_LINK_LIBRARIES})
+  endif()
+  if(ARG_OUTPUT_DIRECTORY)
+    set_target_properties(${target} PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${ARG_OUTPUT_DIRECTORY})
   endif()
   target_compile_definitions(${target} PRIVATE MTLED_PLUGIN_NAME="${name}" MTLED_PLUGIN_CATEGORY="${category}")
 endfunction()

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   CLI::App cli{"mtled: meshless total Lagrangian explicit dynamics for needle insertion into soft tissue"};
   cli.set_version_flag("--version", MTLED_VERSION_STRING);
   cli.require_subcommand(1);
+  cli.fallthrough();  // global options may follow the subcommand: mtled run scene.json --log-level debug
   std::string log_level = "info";
   cli.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));

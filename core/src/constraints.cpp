@@ -50,6 +50,7 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
     comp.phi.setFromTriplets(triplets.begin(), triplets.end());
     comp.residual.resize(m);
     comp.y.resize(m);
+    comp.lambda = Eigen::VectorXd::Zero(m);
     if (m == 0) continue;
     Eigen::SparseMatrix<double> phi_m = comp.phi;  // column-major copy, scaled by M^-1 column-wise
     for (Eigen::Index j = 0; j < phi_m.outerSize(); ++j)
@@ -84,8 +85,18 @@ void ConstraintSystem::enforce(std::span<double> u, double alpha) {
       for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
         u[3 * static_cast<std::size_t>(it.col()) + c] += inverse_mass_[it.col()] * it.value() * yr;
       const auto& row = comp.rows[r];
-      sets_[row.set]->reactions[row.entry][c] = yr / alpha;
+      comp.lambda[r] = yr / alpha;
+      sets_[row.set]->reactions[row.entry][c] = comp.lambda[r];
     }
+  }
+}
+
+void ConstraintSystem::add_constraint_forces(std::span<double> f) const {
+  for (int c = 0; c < 3; ++c) {
+    const Component& comp = components_[c];
+    for (Eigen::Index r = 0; r < static_cast<Eigen::Index>(comp.rows.size()); ++r)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
+        f[3 * static_cast<std::size_t>(it.col()) + c] += it.value() * comp.lambda[r];
   }
 }
 

@@ -100,8 +100,9 @@ void check_mesh(TetMesh& mesh, bool fix_orientation) {
   if (!problems.empty()) throw InputError(std::move(problems));
 }
 
-std::vector<char> surface_nodes(const TetMesh& mesh) {
-  // A face is on the boundary when exactly one tet uses it. Faces are keyed by their sorted vertices.
+std::vector<std::array<Index, 3>> boundary_faces(const TetMesh& mesh) {
+  // A face is on the boundary when exactly one tet uses it. Faces are keyed by their sorted vertices; the
+  // kept copy remembers its orientation in its tet.
   struct Key {
     Index a, b, c;
     bool operator==(const Key& o) const { return a == o.a && b == o.b && c == o.c; }
@@ -112,20 +113,37 @@ std::vector<char> surface_nodes(const TetMesh& mesh) {
              (static_cast<std::size_t>(k.c) * 83492791u);
     }
   };
-  std::unordered_map<Key, int, Hash> count;
-  count.reserve(mesh.tets.size() * 3);
-  static constexpr int kFaces[4][3] = {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}};
-  for (const auto& tet : mesh.tets) {
+  struct Seen {
+    int count;
+    std::array<Index, 3> oriented;
+  };
+  std::unordered_map<Key, Seen, Hash> faces;
+  faces.reserve(mesh.tets.size() * 3);
+  // With positive volume (b-a).((c-a)x(d-a)) > 0, these vertex orders give outward normals.
+  static constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  for (Index t = 0; t < mesh.tet_count(); ++t) {
+    const auto& tet = mesh.tets[t];
+    const bool flipped = tet_volume(mesh, t) < 0.0;
     for (const auto& f : kFaces) {
-      std::array<Index, 3> v{tet[f[0]], tet[f[1]], tet[f[2]]};
+      std::array<Index, 3> oriented{tet[f[0]], tet[f[1]], tet[f[2]]};
+      if (flipped) std::swap(oriented[1], oriented[2]);
+      std::array<Index, 3> v = oriented;
       std::sort(v.begin(), v.end());
-      ++count[Key{v[0], v[1], v[2]}];
+      auto [it, inserted] = faces.try_emplace(Key{v[0], v[1], v[2]}, Seen{0, oriented});
+      ++it->second.count;
     }
   }
+  std::vector<std::array<Index, 3>> boundary;
+  for (const auto& [key, seen] : faces)
+    if (seen.count == 1) boundary.push_back(seen.oriented);
+  std::sort(boundary.begin(), boundary.end());  // a deterministic order
+  return boundary;
+}
+
+std::vector<char> surface_nodes(const TetMesh& mesh) {
   std::vector<char> surface(mesh.points.size(), 0);
-  for (const auto& [key, c] : count) {
-    if (c == 1) surface[key.a] = surface[key.b] = surface[key.c] = 1;
-  }
+  for (const auto& face : boundary_faces(mesh))
+    for (Index v : face) surface[v] = 1;
   return surface;
 }
 

@@ -50,6 +50,8 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   build_integration_points(options.integration_points_per_tet);
   build_supports();
   build_time_steps();
+  xi_.assign(3 * static_cast<std::size_t>(node_count()), 0.0);
+  if (options.consistent_integration) build_integration_correction();
   thread_forces_.resize(static_cast<std::size_t>(omp_get_max_threads()));
   for (auto& buffer : thread_forces_) buffer.assign(3 * static_cast<std::size_t>(node_count()), 0.0);
 }
@@ -87,101 +89,100 @@ void Model::build_integration_points(int points_per_tet) {
   }
 }
 
-void Model::build_supports() {
+void Model::build_rows(const std::vector<Vec3>& points, bool gradients, const char* what, SupportRows& rows,
+                       SupportStatistics* stats) const {
   const int needed = shape_functions_->minimum_support_size();
-  // Rows for integration points (gradients) and for the nodes themselves (values, for interpolation).
-  auto build = [&](const std::vector<Vec3>& points, bool gradients, const char* what, SupportRows& rows,
-                   SupportStatistics* stats) {
-    const Index n = static_cast<Index>(points.size());
-    std::vector<std::vector<Index>> support(points.size());
-    std::vector<RowFailure> failures(static_cast<std::size_t>(omp_get_max_threads()));
+  const Index n = static_cast<Index>(points.size());
+  std::vector<std::vector<Index>> support(points.size());
+  std::vector<RowFailure> failures(static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel
-    {
-      std::vector<Index> candidates;
-      RowFailure& failure = failures[static_cast<std::size_t>(omp_get_thread_num())];
+  {
+    std::vector<Index> candidates;
+    RowFailure& failure = failures[static_cast<std::size_t>(omp_get_thread_num())];
 #pragma omp for schedule(static)
-      for (Index r = 0; r < n; ++r) {
-        node_search_->within(points[r], max_radius_, candidates);
-        auto& s = support[r];
-        for (Index i : candidates)
-          if ((mesh_.points[i] - points[r]).norm() < radius_[i]) s.push_back(i);
-        std::sort(s.begin(), s.end());
-        if (static_cast<int>(s.size()) < needed && r < failure.row) {
-          failure.row = r;
-          failure.message = fmt::format(
-              "{} {} at {} lies in the support of only {} nodes; the shape functions need at least {}. Increase "
-              "/shape_function/support_dilatation (now {:g}) or use a finer, more even mesh",
-              what, r, point_text(points[r]), s.size(), needed, shape_functions_->support_dilatation());
-        }
+    for (Index r = 0; r < n; ++r) {
+      node_search_->within(points[r], max_radius_, candidates);
+      auto& s = support[r];
+      for (Index i : candidates)
+        if ((mesh_.points[i] - points[r]).norm() < radius_[i]) s.push_back(i);
+      std::sort(s.begin(), s.end());
+      if (static_cast<int>(s.size()) < needed && r < failure.row) {
+        failure.row = r;
+        failure.message = fmt::format(
+            "{} {} at {} lies in the support of only {} nodes; the shape functions need at least {}. Increase "
+            "/shape_function/support_dilatation (now {:g}) or use a finer, more even mesh",
+            what, r, point_text(points[r]), s.size(), needed, shape_functions_->support_dilatation());
       }
     }
-    for (const auto& f : failures)
-      if (f.row != std::numeric_limits<Index>::max()) throw InputError("/shape_function", f.message);
+  }
+  for (const auto& f : failures)
+    if (f.row != std::numeric_limits<Index>::max()) throw InputError("/shape_function", f.message);
 
-    rows.offsets.assign(points.size() + 1, 0);
-    for (Index r = 0; r < n; ++r) rows.offsets[r + 1] = rows.offsets[r] + static_cast<std::int64_t>(support[r].size());
-    const auto total = static_cast<std::size_t>(rows.offsets.back());
-    rows.nodes.resize(total);
-    if (gradients) {
-      rows.gradients.resize(3 * total);
-    } else {
-      rows.values.resize(total);
-    }
-    std::vector<double> min_condition(static_cast<std::size_t>(omp_get_max_threads()), 1.0);
+  rows.offsets.assign(points.size() + 1, 0);
+  for (Index r = 0; r < n; ++r) rows.offsets[r + 1] = rows.offsets[r] + static_cast<std::int64_t>(support[r].size());
+  const auto total = static_cast<std::size_t>(rows.offsets.back());
+  rows.nodes.resize(total);
+  if (gradients) {
+    rows.gradients.resize(3 * total);
+  } else {
+    rows.values.resize(total);
+  }
+  std::vector<double> min_condition(static_cast<std::size_t>(omp_get_max_threads()), 1.0);
 #pragma omp parallel
-    {
-      std::vector<Vec3> coordinates, grads;
-      std::vector<double> radii, values;
-      RowFailure& failure = failures[static_cast<std::size_t>(omp_get_thread_num())];
-      double& condition = min_condition[static_cast<std::size_t>(omp_get_thread_num())];
+  {
+    std::vector<Vec3> coordinates, grads;
+    std::vector<double> radii, values;
+    RowFailure& failure = failures[static_cast<std::size_t>(omp_get_thread_num())];
+    double& condition = min_condition[static_cast<std::size_t>(omp_get_thread_num())];
 #pragma omp for schedule(static)
-      for (Index r = 0; r < n; ++r) {
-        const auto& s = support[r];
-        coordinates.resize(s.size());
-        radii.resize(s.size());
-        values.resize(s.size());
-        grads.resize(gradients ? s.size() : 0);
-        for (std::size_t k = 0; k < s.size(); ++k) {
-          coordinates[k] = mesh_.points[s[k]];
-          radii[k] = radius_[s[k]];
-        }
-        const ShapeFunctionFit fit = shape_functions_->evaluate(points[r], coordinates, radii, values, grads);
-        condition = std::min(condition, fit.reciprocal_condition);
-        if (!fit.ok && r < failure.row) {
-          failure.row = r;
-          failure.message = fmt::format(
-              "the shape functions cannot be built at {} {} at {}: its {} support nodes are too few or nearly "
-              "coplanar (reciprocal condition {:.2g}). Increase /shape_function/support_dilatation (now {:g})",
-              what, r, point_text(points[r]), s.size(), fit.reciprocal_condition,
-              shape_functions_->support_dilatation());
-        }
-        const auto start = static_cast<std::size_t>(rows.offsets[r]);
-        for (std::size_t k = 0; k < s.size(); ++k) {
-          rows.nodes[start + k] = s[k];
-          if (gradients) {
-            for (int d = 0; d < 3; ++d) rows.gradients[3 * (start + k) + d] = grads[k][d];
-          } else {
-            rows.values[start + k] = values[k];
-          }
+    for (Index r = 0; r < n; ++r) {
+      const auto& s = support[r];
+      coordinates.resize(s.size());
+      radii.resize(s.size());
+      values.resize(s.size());
+      grads.resize(gradients ? s.size() : 0);
+      for (std::size_t k = 0; k < s.size(); ++k) {
+        coordinates[k] = mesh_.points[s[k]];
+        radii[k] = radius_[s[k]];
+      }
+      const ShapeFunctionFit fit = shape_functions_->evaluate(points[r], coordinates, radii, values, grads);
+      condition = std::min(condition, fit.reciprocal_condition);
+      if (!fit.ok && r < failure.row) {
+        failure.row = r;
+        failure.message = fmt::format(
+            "the shape functions cannot be built at {} {} at {}: its {} support nodes are too few or nearly "
+            "coplanar (reciprocal condition {:.2g}). Increase /shape_function/support_dilatation (now {:g})",
+            what, r, point_text(points[r]), s.size(), fit.reciprocal_condition, shape_functions_->support_dilatation());
+      }
+      const auto start = static_cast<std::size_t>(rows.offsets[r]);
+      for (std::size_t k = 0; k < s.size(); ++k) {
+        rows.nodes[start + k] = s[k];
+        if (gradients) {
+          for (int d = 0; d < 3; ++d) rows.gradients[3 * (start + k) + d] = grads[k][d];
+        } else {
+          rows.values[start + k] = values[k];
         }
       }
     }
-    for (const auto& f : failures)
-      if (f.row != std::numeric_limits<Index>::max()) throw InputError("/shape_function", f.message);
-    if (stats != nullptr) {
-      stats->min = std::numeric_limits<Index>::max();
-      stats->max = 0;
-      for (Index r = 0; r < n; ++r) {
-        const auto size = static_cast<Index>(rows.size(r));
-        stats->min = std::min(stats->min, size);
-        stats->max = std::max(stats->max, size);
-      }
-      stats->mean = static_cast<double>(total) / std::max<Index>(n, 1);
-      stats->min_reciprocal_condition = *std::min_element(min_condition.begin(), min_condition.end());
+  }
+  for (const auto& f : failures)
+    if (f.row != std::numeric_limits<Index>::max()) throw InputError("/shape_function", f.message);
+  if (stats != nullptr) {
+    stats->min = std::numeric_limits<Index>::max();
+    stats->max = 0;
+    for (Index r = 0; r < n; ++r) {
+      const auto size = static_cast<Index>(rows.size(r));
+      stats->min = std::min(stats->min, size);
+      stats->max = std::max(stats->max, size);
     }
-  };
-  build(ip_position_, true, "integration point", ip_rows_, &ip_stats_);
-  build(mesh_.points, false, "node", node_rows_, nullptr);
+    stats->mean = static_cast<double>(total) / std::max<Index>(n, 1);
+    stats->min_reciprocal_condition = *std::min_element(min_condition.begin(), min_condition.end());
+  }
+}
+
+void Model::build_supports() {
+  build_rows(ip_position_, true, "integration point", ip_rows_, &ip_stats_);
+  build_rows(mesh_.points, false, "node", node_rows_, nullptr);
 
   // Every node must carry mass: it must lie in the support of some integration point.
   std::vector<char> used(mesh_.points.size(), 0);
@@ -209,6 +210,37 @@ void Model::build_time_steps() {
     const double wave_speed = std::sqrt(material.p_wave_modulus() / material.density());
     ip_dt_[ip] = 2.0 / (wave_speed * std::sqrt(static_cast<double>(ip_rows_.size(ip)) * sum));
   }
+}
+
+void Model::build_integration_correction() {
+  // Boundary integral b_I = int_Gamma N_I n dGamma by vertex quadrature: each boundary triangle gives a third
+  // of its area vector to each of its vertices K, and N_I is evaluated at the nodes (the rows used for
+  // interpolation). With the same points as the nodal constraints, the boundary term P b_I of a homogeneous
+  // stress is exactly sum_K N_I(X_K) (P A_K): reactions at the constrained nodes can balance it, so the patch
+  // test holds to the steady-state tolerance (a Gauss rule on the faces leaves an O(h) mismatch).
+  std::vector<Vec3> area(static_cast<std::size_t>(node_count()), Vec3::Zero());
+  for (const auto& f : boundary_faces(mesh_)) {
+    const Vec3& a = mesh_.points[f[0]];
+    const Vec3 share = (mesh_.points[f[1]] - a).cross(mesh_.points[f[2]] - a) / 6.0;  // area / 3, outward
+    for (Index v : f) area[v] += share;
+  }
+  std::vector<Vec3> residual(static_cast<std::size_t>(node_count()), Vec3::Zero());
+  std::vector<double> weight(static_cast<std::size_t>(node_count()), 0.0);
+  for (Index k = 0; k < node_count(); ++k) {
+    if (area[k].squaredNorm() == 0.0) continue;  // interior node
+    for (std::int64_t e = node_rows_.offsets[k]; e < node_rows_.offsets[k + 1]; ++e)
+      residual[node_rows_.nodes[e]] += node_rows_.values[e] * area[k];
+  }
+  for (Index ip = 0; ip < integration_point_count(); ++ip) {
+    for (std::int64_t k = ip_rows_.offsets[ip]; k < ip_rows_.offsets[ip + 1]; ++k) {
+      const Index node = ip_rows_.nodes[k];
+      const double* g = &ip_rows_.gradients[3 * k];
+      residual[node] -= ip_weight_[ip] * Vec3(g[0], g[1], g[2]);
+      weight[node] += ip_weight_[ip];
+    }
+  }
+  for (Index i = 0; i < node_count(); ++i)
+    for (int d = 0; d < 3; ++d) xi_[3 * static_cast<std::size_t>(i) + d] = residual[i][d] / weight[i];
 }
 
 std::vector<double> Model::lumped_mass(std::span<const double> density_scale) const {
@@ -245,6 +277,7 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
       const std::int64_t begin = ip_rows_.offsets[ip], end = ip_rows_.offsets[ip + 1];
       const Index* nodes = ip_rows_.nodes.data();
       const double* grads = ip_rows_.gradients.data();
+      const double* xi = xi_.data();
       Mat3 F = Mat3::Identity();
       for (std::int64_t k = begin; k < end; ++k) {
         const double* g = grads + 3 * k;
@@ -262,9 +295,11 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
       }
       const Mat3 P = ip_weight_[ip] * (F * S);  // first Piola-Kirchhoff stress times the weight
       for (std::int64_t k = begin; k < end; ++k) {
+        const auto node = static_cast<std::size_t>(nodes[k]);
         const double* g = grads + 3 * k;
-        double* fi = local.data() + 3 * static_cast<std::size_t>(nodes[k]);
-        for (int a = 0; a < 3; ++a) fi[a] += P(a, 0) * g[0] + P(a, 1) * g[1] + P(a, 2) * g[2];
+        const double gx = g[0] + xi[3 * node], gy = g[1] + xi[3 * node + 1], gz = g[2] + xi[3 * node + 2];
+        double* fi = local.data() + 3 * node;
+        for (int a = 0; a < 3; ++a) fi[a] += P(a, 0) * gx + P(a, 1) * gy + P(a, 2) * gz;
       }
     }
     // Reduce the per-thread buffers in a fixed order, each thread summing its own slice of the forces.

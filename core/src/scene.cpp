@@ -164,11 +164,26 @@ void apply_override(SceneDocument& document, const std::string& assignment) {
     value = text;  // bare words are strings: --set /shape_function/type=mls
   }
   try {
-    const json::json_pointer ptr(pointer);
-    const json::json_pointer parent = ptr.parent_pointer();
-    if (!parent.empty() && !document.root.contains(parent))
-      throw InputError("--set " + pointer, fmt::format("the scene has nothing at {}", parent.to_string()));
-    document.root[ptr] = value;
+    // Missing objects on the way are created (optional sections such as /discretisation); a misspelt key
+    // is then reported by validation like any other unknown key. Lists are not grown: indices must exist.
+    const json::json_pointer target(pointer);
+    std::vector<std::string> tokens;
+    for (json::json_pointer p = target; !p.empty(); p = p.parent_pointer()) tokens.insert(tokens.begin(), p.back());
+    const json* node = &document.root;
+    for (const auto& token : tokens) {
+      if (node->is_array()) {
+        const bool index = !token.empty() && token.find_first_not_of("0123456789") == std::string::npos;
+        if (!index || std::stoul(token) >= node->size())
+          throw InputError("--set " + pointer, fmt::format("\"{}\" is not an index of a list of {} entries", token,
+                                                           node->size()));
+        node = &(*node)[std::stoul(token)];
+      } else if (node->is_object() && node->contains(token)) {
+        node = &(*node)[token];
+      } else {
+        break;
+      }
+    }
+    document.root[target] = value;
   } catch (const json::exception& e) {
     throw InputError("--set " + pointer, fmt::format("cannot set this pointer: {}", e.what()));
   }
@@ -197,6 +212,11 @@ const ComponentDeclaration& discretisation_declaration() {
         .unit("1")
         .doc("integration points in each background tet: 1 at the centroid (the paper's choice) or a 4-point "
              "rule exact for quadratics");
+    d.boolean("consistent_integration")
+        .defaults(true)
+        .doc("correct the test-function gradients so that the discrete equations reproduce homogeneous "
+             "deformations exactly (variationally consistent integration, Chen et al. 2013; passes the patch "
+             "test); false gives the paper's plain MTLED quadrature");
     return d;
   }();
   return declaration;

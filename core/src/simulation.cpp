@@ -87,6 +87,7 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   auto shape_functions = build<ShapeFunctions>(catalog, scene.shape_function);
   Model::Options options;
   options.integration_points_per_tet = static_cast<int>(scene.discretisation.integer("integration_points_per_tet"));
+  options.consistent_integration = scene.discretisation.boolean("consistent_integration");
   model_ = std::make_unique<Model>(std::move(mesh), shape_functions, std::move(region_material), options);
   const SupportStatistics stats = model_->ip_support_statistics();
   log().info("model: {} nodes, {} integration points, support size min/mean/max {}/{:.1f}/{}", model_->node_count(),
@@ -108,6 +109,12 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
     for (NodalConstraints* set : driver->constraints()) constraint_sets_.push_back(set);
     force_drivers_ += driver->applies_forces() ? 1 : 0;
   }
+  for (std::size_t a = 0; a < constraint_sets_.size(); ++a)
+    for (std::size_t b = 0; b < a; ++b)
+      if (constraint_sets_[a]->name == constraint_sets_[b]->name)
+        throw InputError("/boundaries", fmt::format("two constraint sets are named \"{}\" (reactions.csv could not tell "
+                                                    "them apart): give each boundary a distinct \"name\"",
+                                                    constraint_sets_[a]->name));
   constraint_system_ = std::make_unique<ConstraintSystem>(*model_);
 
   // State

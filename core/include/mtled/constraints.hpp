@@ -25,6 +25,8 @@ class ConstraintSystem {
   // the later sets get a zero reaction there.
   void update(const std::vector<NodalConstraints*>& sets, std::span<const double> mass, bool mass_changed);
   void enforce(std::span<double> u, double alpha);
+  // f += Phi^T lambda: the nodal forces the constraints exerted in the last enforce().
+  void add_constraint_forces(std::span<double> f) const;
   Index constrained_count() const;
   long factorisations() const { return factorisations_; }
 
@@ -37,7 +39,7 @@ class ConstraintSystem {
     std::vector<Row> rows;
     Eigen::SparseMatrix<double, Eigen::RowMajor> phi;
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor;
-    Eigen::VectorXd residual, y;
+    Eigen::VectorXd residual, y, lambda;
   };
   void rebuild(std::span<const double> mass);
 

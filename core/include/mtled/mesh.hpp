@@ -36,7 +36,10 @@ void remove_unused_nodes(TetMesh& mesh);
 // naming `mesh.source`.
 void check_mesh(TetMesh& mesh, bool fix_orientation = true);
 
-// Per-node flag: 1 if the node lies on a boundary face (a face used by exactly one tet).
+// The boundary faces (faces used by exactly one tet), ordered so that (b - a) x (c - a) points out of the body.
+std::vector<std::array<Index, 3>> boundary_faces(const TetMesh& mesh);
+
+// Per-node flag: 1 if the node lies on a boundary face.
 std::vector<char> surface_nodes(const TetMesh& mesh);
 
 // Per-node mean length of the mesh edges that meet at the node.

@@ -36,6 +36,12 @@ class Model {
  public:
   struct Options {
     int integration_points_per_tet = 1;
+    // Variationally consistent integration (Chen, Hillman, Rueter, IJNME 2013): the test-function gradients
+    // at the integration points get a per-node correction xi_I so that sum_ip w grad N_I equals the boundary
+    // integral of N_I n exactly. The discrete equations then reproduce any homogeneous deformation (the patch
+    // test) despite the inexact quadrature of rational shape functions; F still uses the uncorrected
+    // gradients, so rigid motions stay stress-free.
+    bool consistent_integration = true;
   };
 
   // `region_materials[r]` fills mesh region r.
@@ -70,7 +76,11 @@ class Model {
   // dt = 2 / (c sqrt(n sum_I |grad N_I|^2)), c = sqrt((lambda + 2 mu) / rho).
   const std::vector<double>& ip_critical_time_steps() const { return ip_dt_; }
 
-  // Internal nodal forces f_I = sum_ip w F S grad N_I for nodal parameters u (3 per node). Returns -1, or
+  // Per-node correction of the test-function gradients (3 per node; zeros when consistent integration is
+  // off). The internal force uses grad N_I + xi_I.
+  const std::vector<double>& gradient_correction() const { return xi_; }
+
+  // Internal nodal forces f_I = sum_ip w F S (grad N_I + xi_I) for nodal parameters u (3 per node). Returns -1, or
   // the lowest-numbered integration point whose F is inadmissible (J <= 0 or not finite); f is then
   // incomplete. Parallel over integration points (OpenMP); not re-entrant.
   Index internal_forces(std::span<const double> u, std::span<double> f) const;
@@ -88,6 +98,10 @@ class Model {
   void build_integration_points(int points_per_tet);
   void build_supports();
   void build_time_steps();
+  void build_integration_correction();
+  // Support rows (values, or values and gradients) at arbitrary points; throws InputError naming `what`.
+  void build_rows(const std::vector<Vec3>& points, bool gradients, const char* what, SupportRows& rows,
+                  SupportStatistics* stats) const;
 
   TetMesh mesh_;
   std::shared_ptr<const ShapeFunctions> shape_functions_;
@@ -107,6 +121,7 @@ class Model {
   SupportRows node_rows_;
   SupportStatistics ip_stats_;
   std::vector<double> ip_dt_;
+  std::vector<double> xi_;
 
   mutable std::vector<std::vector<double>> thread_forces_;
 };

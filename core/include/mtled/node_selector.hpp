@@ -8,7 +8,7 @@
 //   {"sphere": {"center": [..], "radius": r}}                    nodes within r of the centre
 // with optional "tolerance" (m; default 1e-6 of the mesh's bounding-box diagonal) and "surface_only"
 // (only nodes on the body's boundary; default false).
-#include <nlohmann/json.hpp>
+#include "mtled/json.hpp"
 
 #include <optional>
 #include <string>

@@ -2,7 +2,7 @@
 // One declaration per component: every parameter's type, default (or required), unit, allowed range and
 // doc. The same declaration drives scene validation, `mtled plugins --describe`, `mtled schema`, the
 // generated parameter reference (docs/parameters.md) and the conformance tests.
-#include <nlohmann/json.hpp>
+#include "mtled/json.hpp"
 
 #include <optional>
 #include <string>
@@ -14,8 +14,6 @@
 #include "mtled/types.hpp"
 
 namespace mtled {
-
-using json = nlohmann::json;
 
 // What a component is for. Each category has its own interface in mtled/interfaces/ and its own place in
 // a scene. `scene` is the kernel's own sections (discretisation, output).

@@ -1,0 +1,6 @@
+#pragma once
+#include <nlohmann/json.hpp>
+
+namespace mtled {
+using json = nlohmann::json;
+}
