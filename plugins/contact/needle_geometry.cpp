@@ -1,0 +1,70 @@
+#include "needle_geometry.hpp"
+
+#include <fmt/format.h>
+
+namespace mtled {
+
+void declare_needle_path(ComponentDeclaration& d) {
+  d.number("diameter").unit("m").positive().defaults(1.6e-3).doc("needle shaft diameter (the paper: 1.6 mm)");
+  d.vector3("entry").unit("m").doc("point on the body surface where the tip enters (reference coordinates)");
+  d.vector3("direction").unit("1").nonzero().defaults(json::array({0, 0, -1})).doc(
+      "insertion direction (normalised internally)");
+  d.number("depth").unit("m").positive().doc("final insertion depth: the tip's advance from the entry point");
+}
+
+NeedlePath read_needle_path(const Parameters& p) {
+  NeedlePath path;
+  path.entry = p.vector3("entry");
+  path.direction = p.vector3("direction").normalized();
+  path.depth = p.number("depth");
+  path.radius = 0.5 * p.number("diameter");
+  return path;
+}
+
+double spacing_at_entry(const NeedlePath& path, const Model& model) {
+  std::vector<Index> nearest;
+  model.node_search().nearest(path.entry, 8, nearest);
+  double sum = 0.0;
+  for (Index i : nearest) sum += model.node_spacing()[i];
+  return nearest.empty() ? 0.0 : sum / static_cast<double>(nearest.size());
+}
+
+void check_needle_enters_body(const NeedlePath& path, const Model& model, const Parameters& p) {
+  const auto& surface = model.surface();
+  std::vector<Index> nearest;
+  model.node_search().nearest(path.entry, 64, nearest);
+  double distance = INFINITY;
+  Index closest = -1;
+  for (Index i : nearest) {
+    if (!surface[i]) continue;
+    const double d = (model.nodes()[i] - path.entry).norm();
+    if (d < distance) {
+      distance = d;
+      closest = i;
+    }
+  }
+  const double spacing = spacing_at_entry(path, model);
+  if (closest < 0 || distance > 1.5 * spacing) {
+    const Vec3 x = closest >= 0 ? model.nodes()[closest] : Vec3::Zero();
+    throw InputError(p.pointer("entry"),
+                     fmt::format("the entry point ({:.6g}, {:.6g}, {:.6g}) m is {:.3g} mm from the body's surface "
+                                 "(nearest surface node at ({:.6g}, {:.6g}, {:.6g}) m; local node spacing {:.3g} mm): "
+                                 "the needle must enter through the surface; entry is in metres",
+                                 path.entry[0], path.entry[1], path.entry[2], 1e3 * distance, x[0], x[1], x[2],
+                                 1e3 * spacing));
+  }
+  // Some nodes must lie ahead of the entry, near the axis, within the insertion depth.
+  const double reach = std::max(path.radius, spacing);
+  int ahead = 0;
+  for (const auto& x : model.nodes()) {
+    const double s = path.axial(x);
+    if (s > 0.25 * spacing && s <= path.depth && path.radial(x) <= reach) ++ahead;
+  }
+  if (ahead == 0)
+    throw InputError(p.pointer("direction"),
+                     fmt::format("the needle path from the entry along ({:.3g}, {:.3g}, {:.3g}) meets no node of the "
+                                 "body within the depth of {:.3g} mm: does the direction point into the body?",
+                                 path.direction[0], path.direction[1], path.direction[2], 1e3 * path.depth));
+}
+
+}  // namespace mtled

@@ -1,0 +1,34 @@
+#pragma once
+// What every needle model shares: the straight needle's parameters and path, checks that it enters the
+// body, and the nodes along its path.
+#include <vector>
+
+#include "mtled/interfaces/driver.hpp"
+#include "mtled/model.hpp"
+
+namespace mtled {
+
+struct NeedlePath {
+  Vec3 entry = Vec3::Zero();
+  Vec3 direction = -Vec3::UnitZ();  // unit
+  double depth = 0.0;               // final tip advance from the entry (m)
+  double radius = 0.0;              // needle radius (m)
+
+  // Axial coordinate of x along the path (0 at the entry, growing with insertion) and distance from the axis.
+  double axial(const Vec3& x) const { return direction.dot(x - entry); }
+  double radial(const Vec3& x) const { return ((x - entry) - direction * axial(x)).norm(); }
+  Vec3 tip(double advance) const { return entry + advance * direction; }
+};
+
+// Declares diameter, entry, direction and depth (shared by all needle models).
+void declare_needle_path(ComponentDeclaration& d);
+NeedlePath read_needle_path(const Parameters& p);
+
+// Refuses an entry point that is off the body (no surface node within 1.5 mean edge lengths) or a path
+// that meets no nodes of the body, with the scene pointer and a suggestion.
+void check_needle_enters_body(const NeedlePath& path, const Model& model, const Parameters& p);
+
+// Mean edge length of the surface nodes nearest the entry: the local node spacing where the needle enters.
+double spacing_at_entry(const NeedlePath& path, const Model& model);
+
+}  // namespace mtled

@@ -1,0 +1,178 @@
+// `dynamic_relaxation`: adaptive dynamic relaxation for steady (quasi-static) solutions (Joldes, Wittek,
+// Miller, "Computation of intra-operative brain shift using dynamic relaxation", CMAME 2009, and "An
+// adaptive dynamic relaxation method for solving nonlinear finite element problems", IJNMBE 2011).
+//
+// The damped central-difference iteration u+ = u + beta (u - u-) + alpha M^-1 (f_ext - f_int) converges
+// fastest with beta = rho^2, alpha = ((1 + rho) h / 2)^2, rho = (k - 1)/(k + 1), k = 2 / (h w_min), where
+// h is (a safe fraction of) the critical step and w_min the lowest eigenfrequency of M^-1 K. w_min is
+// re-estimated every few steps from the last increment: w^2 ~ du.(f(u_n) - f(u_n-1)) / du.M du. The
+// distance to the steady state is bounded by the geometric series |du| rho / (1 - rho).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "explicit_update.hpp"
+#include "mtled/load_curve.hpp"
+#include "mtled/plugin.hpp"
+#include "mtled/simulation.hpp"
+
+namespace mtled {
+
+class DynamicRelaxationIntegrator final : public TimeIntegrator {
+ public:
+  static void declare(ComponentDeclaration& d) {
+    d.summary(
+        "Adaptive dynamic relaxation: loads are applied over `load_steps` steps, then the iteration continues "
+        "until the estimated distance to the steady state is below `tolerance`.");
+    d.number("time_step_factor")
+        .unit("1")
+        .positive()
+        .defaults(0.9)
+        .doc("multiplier on the estimated stable time step; above 1 risks instability, which the stability "
+             "monitors then report");
+    d.integer("load_steps").unit("1").at_least(1).defaults(2000).doc(
+        "steps over which the loads grow from 0 to full; more steps follow a path-dependent load (the needle) "
+        "more quasi-statically");
+    d.string("load_curve").defaults("smooth").choices({"smooth", "linear"}).doc(
+        "shape of the load ramp: smooth (10x^3 - 15x^4 + 6x^5) or linear");
+    d.number("tolerance").unit("1").positive().less_than(1.0).defaults(1e-6).doc(
+        "stop when the estimated distance to the steady state (max over nodes) is below this fraction of the "
+        "largest displacement");
+    d.integer("converged_steps").unit("1").at_least(1).defaults(20).doc(
+        "consecutive steps the error estimate must stay under the tolerance");
+    d.integer("max_steps").unit("1").at_least(1).defaults(2000000).doc(
+        "give up (status unstable, what \"not_converged\") after this many steps");
+    d.boolean("mass_scaling").defaults(true).doc(
+        "scale the density per integration point so every point has the same critical time step (changes the "
+        "path to the steady state, not the steady state)");
+    d.integer("damping_update_steps").unit("1").at_least(1).defaults(10).doc(
+        "re-estimate the lowest eigenfrequency (and so the damping) every this many steps");
+    d.example({{"load_steps", 200}, {"tolerance", 1e-5}});
+  }
+
+  explicit DynamicRelaxationIntegrator(const Parameters& p)
+      : factor_(p.number("time_step_factor")),
+        load_steps_(p.integer("load_steps")),
+        curve_(load_curve_from_string(p.string("load_curve"))),
+        tolerance_(p.number("tolerance")),
+        converged_steps_(p.integer("converged_steps")),
+        max_steps_(p.integer("max_steps")),
+        mass_scaling_(p.boolean("mass_scaling")),
+        update_every_(p.integer("damping_update_steps")) {}
+
+  void initialise(Simulation& simulation) override {
+    unscaled_stable_ = simulation.stable_time_step();
+    if (mass_scaling_) {
+      const auto& dt = simulation.model().ip_critical_time_steps();
+      simulation.scale_masses(*std::max_element(dt.begin(), dt.end()));
+    }
+    h_ = factor_ * simulation.stable_time_step();
+    // Start heavily damped (k = 20) until the first estimate of the lowest frequency arrives.
+    set_frequency(0.1 * 2.0 / h_);
+    const std::size_t dofs = simulation.displacement().size();
+    f_int_.assign(dofs, 0.0);
+    f_int_previous_.assign(dofs, 0.0);
+    f_ext_.assign(dofs, 0.0);
+    u_next_.assign(dofs, 0.0);
+  }
+
+  void step(Simulation& simulation) override {
+    const auto u = simulation.displacement();
+    const auto u_previous = simulation.previous_displacement();
+    const auto mass = simulation.mass();
+    f_int_previous_.swap(f_int_);
+    simulation.internal_forces(u, f_int_);
+    if (simulation.has_external_forces()) simulation.external_forces(f_ext_);
+
+    const long n = simulation.step();
+    if (n >= 2 && n % update_every_ == 0) estimate_frequency(u, u_previous, mass);
+
+    explicit_update(u, u_previous, f_ext_, f_int_, mass, alpha_, beta_, u_next_);
+    const double fraction = load_fraction(curve_, static_cast<double>(n + 1) / static_cast<double>(load_steps_));
+    simulation.complete_step(u_next_, static_cast<double>(n + 1) * h_, fraction, alpha_);
+
+    if (n + 1 >= load_steps_) check_convergence(simulation);
+    if (!converged_ && simulation.step() >= max_steps_) {
+      Diagnostic d;
+      d.step = simulation.step();
+      d.time = simulation.time();
+      d.what = "not_converged";
+      d.detail = fmt::format(
+          "dynamic relaxation did not reach the steady state in {} steps: estimated error {:.3g} m against a "
+          "tolerance of {:.3g} m; raise /integrator/max_steps or /integrator/tolerance",
+          max_steps_, error_bound_, tolerance_ * largest_displacement_);
+      throw InstabilityError(std::move(d));
+    }
+  }
+
+  bool finished(const Simulation&) const override { return converged_; }
+
+  json report() const override {
+    return {{"type", "dynamic_relaxation"},
+            {"time_step_s", h_},
+            {"stable_time_step_s", unscaled_stable_},
+            {"time_step_factor", factor_},
+            {"mass_scaling", mass_scaling_},
+            {"load_steps", load_steps_},
+            {"converged", converged_},
+            {"error_bound_m", error_bound_},
+            {"relative_error_bound", largest_displacement_ > 0 ? error_bound_ / largest_displacement_ : 0.0},
+            {"tolerance", tolerance_},
+            {"lowest_frequency_rad_per_s", omega_min_},
+            {"convergence_rate", rho_}};
+  }
+
+ private:
+  void set_frequency(double omega) {
+    omega_min_ = omega;
+    const double k = std::max(2.0 / (h_ * omega), 1.0 + 1e-12);
+    rho_ = (k - 1.0) / (k + 1.0);
+    beta_ = rho_ * rho_;
+    alpha_ = 0.25 * (1.0 + rho_) * (1.0 + rho_) * h_ * h_;
+  }
+
+  void estimate_frequency(std::span<const double> u, std::span<const double> u_previous, std::span<const double> mass) {
+    double stiffness = 0.0, inertia = 0.0;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+      const double du = u[i] - u_previous[i];
+      stiffness += du * (f_int_[i] - f_int_previous_[i]);
+      inertia += du * du * mass[i / 3];
+    }
+    if (!(inertia > 0.0) || !(stiffness > 0.0) || !std::isfinite(stiffness / inertia)) return;
+    set_frequency(std::min(std::sqrt(stiffness / inertia), 2.0 / h_));
+  }
+
+  void check_convergence(const Simulation& simulation) {
+    const auto u = simulation.displacement();
+    const auto u_previous = simulation.previous_displacement();
+    double increment = 0.0, largest = 0.0;
+    for (std::size_t i = 0; i < u.size(); ++i) {
+      increment = std::max(increment, std::abs(u[i] - u_previous[i]));
+      largest = std::max(largest, std::abs(u[i]));
+    }
+    largest_displacement_ = largest;
+    error_bound_ = rho_ < 1.0 ? increment * rho_ / (1.0 - rho_) : INFINITY;
+    below_ = error_bound_ <= tolerance_ * largest ? below_ + 1 : 0;
+    converged_ = below_ >= converged_steps_;
+  }
+
+  double factor_;
+  long load_steps_;
+  LoadCurve curve_;
+  double tolerance_;
+  long converged_steps_, max_steps_;
+  bool mass_scaling_;
+  long update_every_;
+
+  double unscaled_stable_ = 0.0, h_ = 0.0;
+  double omega_min_ = 0.0, rho_ = 0.0, alpha_ = 0.0, beta_ = 0.0;
+  double error_bound_ = INFINITY, largest_displacement_ = 0.0;
+  long below_ = 0;
+  bool converged_ = false;
+  std::vector<double> f_int_, f_int_previous_, f_ext_, u_next_;
+};
+
+}  // namespace mtled
+
+MTLED_PLUGIN(mtled::TimeIntegrator, mtled::DynamicRelaxationIntegrator)
