@@ -1,0 +1,184 @@
+#include "moving_least_squares.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace mtled::shapefunctions {
+
+namespace {
+
+template <int M>
+using BasisVector = Eigen::Matrix<double, M, 1>;
+template <int M>
+using MomentMatrix = Eigen::Matrix<double, M, M>;
+
+struct NodeWeight {
+  double w = 0.0;
+  Vec3 gradient = Vec3::Zero();  // dw/dx, with respect to the evaluation point
+};
+
+// Quartic spline w(r) = 1 - 6r^2 + 8r^3 - 3r^4 = (1 - r)^3 (1 + 3r) for r = |X_I - x| / R_I < 1 (DESIGN.md),
+// and dw/dx = w'(r) dr/dx = 12 (1 - r)^2 (X_I - x) / R_I^2, which needs no division by |X_I - x| and so stays
+// smooth when x sits on the node. Radii that are not positive (or NaN) give no weight.
+NodeWeight quartic_spline(const Vec3& offset, double radius) {
+  NodeWeight result;
+  if (!(radius > 0.0)) return result;
+  const double r = offset.norm() / radius;
+  if (!(r < 1.0)) return result;
+  const double t = 1.0 - r;
+  result.w = t * t * t * (1.0 + 3.0 * r);
+  result.gradient = (12.0 * t * t / (radius * radius)) * offset;
+  return result;
+}
+
+// p(xi) = [1, xi_1, xi_2, xi_3] or, quadratic, followed by [xi_1^2, xi_2^2, xi_3^2, r2 xi_1 xi_2, r2 xi_2 xi_3,
+// r2 xi_3 xi_1] with r2 = sqrt(2). The sqrt(2) on the cross terms makes the sum of squared quadratic
+// coefficients equal |Q|_F^2 for the quadratic form xi^T Q xi, so the MMLS penalty does not depend on how the
+// axes are oriented (plain MLS is unaffected: the basis only changes by an invertible linear map).
+template <int M>
+BasisVector<M> basis_at(const Vec3& xi) {
+  BasisVector<M> p;
+  p[0] = 1.0;
+  p[1] = xi[0];
+  p[2] = xi[1];
+  p[3] = xi[2];
+  if constexpr (M == 10) {
+    constexpr double kSqrt2 = 1.4142135623730951;
+    p[4] = xi[0] * xi[0];
+    p[5] = xi[1] * xi[1];
+    p[6] = xi[2] * xi[2];
+    p[7] = kSqrt2 * xi[0] * xi[1];
+    p[8] = kSqrt2 * xi[1] * xi[2];
+    p[9] = kSqrt2 * xi[2] * xi[0];
+  }
+  return p;
+}
+
+// The penalty acts on the quadratic terms only: D = diag(0, 0, 0, 0, 1, ..., 1).
+template <int M>
+BasisVector<M> quadratic_part(const BasisVector<M>& v) {
+  BasisVector<M> result = v;
+  result.template head<4>().setZero();
+  return result;
+}
+
+// Derivatives. The shape functions do not depend on where the local basis is centred: for plain MLS any
+// shift or scaling of a complete polynomial basis is an invertible linear map that cancels in
+// p^T A^{-1} B, and the MMLS penalty acts on the quadratic coefficients, which a shift of the origin leaves
+// unchanged. So we may differentiate with the origin frozen at x0 = x and the scale frozen at s0 = s(x0):
+// then p(xi_I) is constant, dp(0)/dx_k = e_{1+k} / s0, and
+//   A_k = sum_I w_I,k p_I p_I^T + mu_k D,   c = A^{-1} p(0),   gamma_k = A^{-1} (e_{1+k} / s0 - A_k c),
+//   N_I,k = w_I gamma_k^T p_I + w_I,k c^T p_I.
+// The scale does matter to MMLS (quadratic coefficients grow as s^2), so the penalty seen in the frozen frame
+// is mu(x) = m^2 W(x) (s(x) / s0)^4, whose derivative at x0 is m^2 (W_k + 4 W s_k / s0).
+template <int M>
+ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                     std::span<double> values, std::span<Vec3> gradients) {
+  const std::size_t n = nodes.size();
+  // The scale s is the weight-averaged support radius: close to the support size, so the scaled coordinates
+  // of the nodes that count are O(1) and A is well scaled whatever the units and position; and smooth in x,
+  // because entering and leaving nodes carry zero weight, so the MMLS penalty (which depends on s) is too.
+  double total_weight = 0.0, weighted_radius = 0.0;
+  Vec3 total_weight_gradient = Vec3::Zero(), weighted_radius_gradient = Vec3::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const NodeWeight weight = quartic_spline(nodes[i] - x, radii[i]);
+    total_weight += weight.w;
+    weighted_radius += weight.w * radii[i];
+    total_weight_gradient += weight.gradient;
+    weighted_radius_gradient += radii[i] * weight.gradient;
+  }
+  if (!(total_weight > 0.0) || !std::isfinite(weighted_radius)) return {};
+  const double scale = weighted_radius / total_weight;
+  const double inverse_scale = 1.0 / scale;
+  const Vec3 scale_gradient = (weighted_radius_gradient - scale * total_weight_gradient) / total_weight;
+  // Relative to the total weight, the penalty means the same for sparse and dense supports.
+  const double m2 = penalty * penalty;
+  const double mu = m2 * total_weight;
+  const Vec3 mu_gradient = m2 * (total_weight_gradient + (4.0 * total_weight * inverse_scale) * scale_gradient);
+
+  MomentMatrix<M> moment = MomentMatrix<M>::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 offset = nodes[i] - x;
+    const NodeWeight weight = quartic_spline(offset, radii[i]);
+    if (weight.w == 0.0) continue;
+    const BasisVector<M> p = basis_at<M>(inverse_scale * offset);
+    moment.noalias() += weight.w * p * p.transpose();
+  }
+  if constexpr (M > 4) moment.diagonal().template tail<M - 4>().array() += mu;
+
+  const Eigen::LDLT<MomentMatrix<M>> factor(moment);
+  if (factor.info() != Eigen::Success || !(factor.vectorD().minCoeff() > 0.0)) return {false, 0.0};
+  const double reciprocal_condition = factor.rcond();
+  if (!std::isfinite(reciprocal_condition)) return {false, 0.0};
+  if (reciprocal_condition < kMinimumReciprocalCondition) return {false, reciprocal_condition};
+
+  const BasisVector<M> c = factor.solve(BasisVector<M>::Unit(0));
+  Eigen::Matrix<double, M, 3> gamma = Eigen::Matrix<double, M, 3>::Zero();
+  const bool with_gradients = !gradients.empty();
+  if (with_gradients) {
+    Eigen::Matrix<double, M, 3> rhs = Eigen::Matrix<double, M, 3>::Zero();
+    rhs.template block<3, 3>(1, 0).diagonal().setConstant(inverse_scale);
+    // A_k c without forming A_k: sum_I w_I,k p_I (p_I . c) + mu_k D c.
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec3 offset = nodes[i] - x;
+      const NodeWeight weight = quartic_spline(offset, radii[i]);
+      if (weight.w == 0.0) continue;
+      const BasisVector<M> p = basis_at<M>(inverse_scale * offset);
+      rhs.noalias() -= (p.dot(c) * p) * weight.gradient.transpose();
+    }
+    if constexpr (M > 4) rhs.noalias() -= quadratic_part<M>(c) * mu_gradient.transpose();
+    gamma = factor.solve(rhs);
+  }
+
+  bool finite = true;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 offset = nodes[i] - x;
+    const NodeWeight weight = quartic_spline(offset, radii[i]);
+    if (weight.w == 0.0) continue;
+    const BasisVector<M> p = basis_at<M>(inverse_scale * offset);
+    const double cp = c.dot(p);
+    values[i] = weight.w * cp;
+    finite = finite && std::isfinite(values[i]);
+    if (with_gradients) {
+      gradients[i] = weight.w * (gamma.transpose() * p) + cp * weight.gradient;
+      finite = finite && gradients[i].allFinite();
+    }
+  }
+  if (!finite) {  // cannot happen with a finite, accepted factorisation; never let NaN out regardless
+    std::fill(values.begin(), values.end(), 0.0);
+    std::fill(gradients.begin(), gradients.end(), Vec3::Zero());
+    return {false, 0.0};
+  }
+  return {true, reciprocal_condition};
+}
+
+}  // namespace
+
+ShapeFunctionFit evaluate_moving_least_squares(const MovingLeastSquaresSettings& settings, const Vec3& x,
+                                               std::span<const Vec3> nodes, std::span<const double> radii,
+                                               std::span<double> values, std::span<Vec3> gradients) {
+  if (radii.size() != nodes.size() || values.size() != nodes.size() ||
+      (!gradients.empty() && gradients.size() != nodes.size()))
+    throw std::invalid_argument("evaluate_moving_least_squares: nodes, radii, values and gradients differ in size");
+  std::fill(values.begin(), values.end(), 0.0);
+  std::fill(gradients.begin(), gradients.end(), Vec3::Zero());
+  if (!x.allFinite()) return {};
+  if (settings.basis == PolynomialBasis::linear) return fit<4>(0.0, x, nodes, radii, values, gradients);
+  return fit<10>(settings.quadratic_penalty, x, nodes, radii, values, gradients);
+}
+
+void declare_support_dilatation(ComponentDeclaration& declaration, double default_value, const std::string& advice) {
+  declaration.number("support_dilatation")
+      .unit("1")
+      .between(1.0, 5.0)
+      .defaults(default_value)
+      .doc("d_c: each node's support radius is d_c times the mean length of the mesh edges at the node, and an "
+           "integration point uses every node whose support covers it. Larger values give more nodes per "
+           "support (smoother, better conditioned, slower). " +
+           advice);
+}
+
+}  // namespace mtled::shapefunctions
