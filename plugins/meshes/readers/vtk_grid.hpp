@@ -1,0 +1,51 @@
+#pragma once
+// What the two VTK parsers (legacy .vtk, XML .vtu) hand to VtkFileReader: the tets of an unstructured
+// grid and the data arrays it asked for.
+#include <array>
+#include <functional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mtled/types.hpp"
+#include "support/mesh_file.hpp"
+
+namespace mtled::vtk {
+
+// A point or cell data array. `values` is filled only for the arrays the reader asked for (one value per
+// tuple and component, row by row); the others are listed by name, for messages.
+struct DataArray {
+  std::string name;
+  int components = 1;
+  std::vector<double> values;
+  std::string where;  // "file:line" of its header
+};
+
+struct ArrayRequest {
+  std::vector<std::string> cell_arrays;
+  std::vector<std::string> point_arrays;
+  bool wants_cell(const std::string& name) const;
+  bool wants_point(const std::string& name) const;
+};
+
+struct UnstructuredGrid {
+  std::vector<Vec3> points;
+  std::vector<std::array<Index, 4>> tets;
+  std::vector<std::size_t> tet_cell;  // the cell each tet is, for cell arrays
+  std::size_t cell_count = 0;
+  std::vector<DataArray> cell_arrays;
+  std::vector<DataArray> point_arrays;
+};
+
+// Adds the cells of one piece: 4-node tets (VTK_TETRA = 10) are kept, vertices, lines and surface cells are
+// skipped, other volume cells refused. `ends[c]` is one past the last entry of cell c in `connectivity`;
+// indices are into the piece's points, which start at `first_point` in grid.points. `where(c)` places
+// cell c in the file for messages.
+void add_cells(UnstructuredGrid& grid, std::span<const long long> ends, std::span<const long long> connectivity,
+               std::span<const long long> types, std::size_t first_point, std::size_t piece_points,
+               const std::function<std::string(std::size_t)>& where);
+
+UnstructuredGrid read_legacy_vtk(const mesh_readers::MeshFileText& file, const ArrayRequest& request);
+UnstructuredGrid read_vtu(const mesh_readers::MeshFileText& file, const ArrayRequest& request);
+
+}  // namespace mtled::vtk
