@@ -1,6 +1,7 @@
 #include "test_support.hpp"
 
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <array>
 #include <cstdio>
@@ -18,7 +19,10 @@ fs::path binary_dir() { return MTLED_TEST_BINARY_DIR; }
 fs::path plugin_dir() { return MTLED_TEST_PLUGIN_DIR; }
 
 fs::path scratch_dir(const std::string& name) {
-  const fs::path dir = binary_dir() / "test-output" / name;
+  // ctest runs each test in its own process, in parallel: the folder is unique to the running test.
+  fs::path dir = binary_dir() / "test-output" / name;
+  if (const auto* info = ::testing::UnitTest::GetInstance()->current_test_info())
+    dir /= fmt::format("{}.{}", info->test_suite_name(), info->name());
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;

@@ -1,0 +1,116 @@
+#include <gtest/gtest.h>
+
+#include "mtled/mesh.hpp"
+#include "test_support.hpp"
+
+namespace mtled {
+namespace {
+
+TEST(Mesh, BoxSurfaceAndVolume) {
+  const TetMesh mesh = test::box_mesh(Vec3(2, 1, 1), 4, 3, 2);
+  double volume = 0.0;
+  for (Index t = 0; t < mesh.tet_count(); ++t) {
+    EXPECT_GT(tet_volume(mesh, t), 0.0);
+    volume += tet_volume(mesh, t);
+  }
+  EXPECT_NEAR(volume, 2.0, 1e-12);
+  const auto surface = surface_nodes(mesh);
+  const int interior = (4 - 1) * (3 - 1) * (2 - 1);
+  int on_surface = 0;
+  for (char s : surface) on_surface += s;
+  EXPECT_EQ(on_surface, mesh.node_count() - interior);
+}
+
+TEST(Mesh, BoundaryFacesPointOutwardAndCloseTheSurface) {
+  const TetMesh mesh = test::box_mesh(Vec3(1, 2, 3), 3, 2, 4, 0.2);
+  const auto faces = boundary_faces(mesh);
+  EXPECT_EQ(faces.size(), 2u * 2 * (3 * 2 + 2 * 4 + 3 * 4));  // two triangles per boundary square
+  Vec3 sum = Vec3::Zero();
+  double area = 0.0;
+  const Vec3 centre(0.5, 1.0, 1.5);
+  for (const auto& f : faces) {
+    const Vec3& a = mesh.points[f[0]];
+    const Vec3 n = 0.5 * (mesh.points[f[1]] - a).cross(mesh.points[f[2]] - a);
+    EXPECT_GT(n.dot(a - centre), 0.0);  // a convex body: outward normals point away from its centre
+    sum += n;
+    area += n.norm();
+  }
+  EXPECT_LT(sum.norm(), 1e-12);  // a closed surface
+  EXPECT_NEAR(area, 2.0 * (1 * 2 + 2 * 3 + 1 * 3), 1e-12);
+}
+
+TEST(Mesh, MeanEdgeLengthOfAUniformGrid) {
+  // A cube of side h cut into 6 Kuhn tets has edges h (axes), h sqrt2 (face diagonals), h sqrt3 (main
+  // diagonal): every node's mean lies between h and h sqrt3.
+  const TetMesh mesh = test::box_mesh(Vec3(1, 1, 1), 5, 5, 5);
+  for (double h : mean_edge_length_at_nodes(mesh)) {
+    EXPECT_GE(h, 0.2 - 1e-12);
+    EXPECT_LE(h, 0.2 * std::sqrt(3.0) + 1e-12);
+  }
+}
+
+TEST(Mesh, CheckMeshFixesOrientationAndRefusesDegenerateTets) {
+  TetMesh mesh = test::box_mesh(Vec3(1, 1, 1), 1, 1, 1);
+  std::swap(mesh.tets[0][0], mesh.tets[0][1]);
+  ASSERT_LT(tet_volume(mesh, 0), 0.0);
+  check_mesh(mesh);
+  EXPECT_GT(tet_volume(mesh, 0), 0.0);
+
+  TetMesh flat = mesh;
+  flat.tets[1] = {flat.tets[1][0], flat.tets[1][1], flat.tets[1][2], flat.tets[1][2]};
+  flat.source = "flat.msh";
+  try {
+    check_mesh(flat);
+    FAIL() << "a zero-volume tet was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "flat.msh");
+    EXPECT_NE(std::string(e.what()).find("zero volume"), std::string::npos);
+  }
+
+  TetMesh inverted = mesh;
+  std::swap(inverted.tets[2][0], inverted.tets[2][1]);
+  EXPECT_THROW(check_mesh(inverted, /*fix_orientation=*/false), InputError);
+
+  TetMesh out_of_range = mesh;
+  out_of_range.tets[0][3] = 1000;
+  EXPECT_THROW(check_mesh(out_of_range), InputError);
+}
+
+TEST(Mesh, RemoveUnusedNodesKeepsOrderAndSets) {
+  TetMesh mesh = test::box_mesh(Vec3(1, 1, 1), 1, 1, 1);
+  mesh.points.insert(mesh.points.begin(), Vec3(9, 9, 9));  // an unused geometry point first
+  for (auto& tet : mesh.tets)
+    for (auto& v : tet) ++v;
+  for (auto& [name, set] : mesh.node_sets)
+    for (auto& v : set) ++v;
+  mesh.node_sets["stray"] = {0};
+  remove_unused_nodes(mesh);
+  EXPECT_EQ(mesh.node_count(), 8);
+  EXPECT_TRUE(mesh.node_sets["stray"].empty());
+  EXPECT_EQ(mesh.node_sets["z0"].size(), 4u);
+  check_mesh(mesh);
+}
+
+TEST(Mesh, SelectNodes) {
+  const TetMesh mesh = test::box_mesh(Vec3(1, 1, 1), 3, 3, 3);
+  const auto surface = surface_nodes(mesh);
+  std::vector<Problem> problems;
+  const auto plane = NodeSelector::parse({{"plane", {{"point", {0, 0, 1}}, {"normal", {0, 0, 1}}}}}, "/n", problems);
+  EXPECT_EQ(select_nodes(*plane, mesh, surface, "/n").size(), 16u);
+  const auto group = NodeSelector::parse({{"group", "z1"}}, "/n", problems);
+  EXPECT_EQ(select_nodes(*group, mesh, surface, "/n"), select_nodes(*plane, mesh, surface, "/n"));
+  const auto all = NodeSelector::parse({{"box", {{"min", {0, 0, 0}}, {"max", {1, 1, 1}}}}, {"surface_only", true}}, "/n",
+                                       problems);
+  EXPECT_EQ(select_nodes(*all, mesh, surface, "/n").size(), 64u - 8u);
+  const auto typo = NodeSelector::parse({{"group", "z2"}}, "/b/0/nodes", problems);
+  try {
+    select_nodes(*typo, mesh, surface, "/b/0/nodes");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "/b/0/nodes/group");
+    EXPECT_NE(std::string(e.what()).find("did you mean"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace mtled

@@ -1,0 +1,110 @@
+// The plugin loader: only named plugins load; mismatched, duplicated, missing or failing plugins are
+// refused with messages that say what differs and where.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+
+#include "mtled/plugin_catalog.hpp"
+#include "mtled/version.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace mtled {
+namespace {
+
+const fs::path kBad = MTLED_TEST_BAD_PLUGIN_DIR;
+
+std::string load_error(PluginCatalog& catalog, const std::string& name) {
+  try {
+    catalog.load(Category::material, name, "/materials/0/type");
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems().at(0).where, "/materials/0/type");
+    return e.what();
+  }
+  ADD_FAILURE() << name << " was loaded but should have been refused";
+  return "";
+}
+
+TEST(PluginCatalog, FindsPluginsByFileNameWithoutLoadingThem) {
+  PluginCatalog catalog({test::plugin_dir()});
+  EXPECT_NE(catalog.find(Category::integrator, "dynamic_relaxation"), nullptr);
+  EXPECT_NE(catalog.find(Category::boundary, "fixed"), nullptr);
+  EXPECT_TRUE(catalog.loaded_files().empty());
+  catalog.load(Category::boundary, "fixed");
+  EXPECT_EQ(catalog.loaded_files(), std::vector<std::string>{"mtled-boundary-fixed.so"});
+}
+
+TEST(PluginCatalog, RefusesAnotherAbiVersion) {
+  PluginCatalog catalog({kBad / "abi"});
+  const std::string message = load_error(catalog, "abi_mismatch");
+  EXPECT_NE(message.find("built for mtled ABI version 999"), std::string::npos) << message;
+  EXPECT_NE(message.find("this mtled has ABI version " + std::to_string(MTLED_ABI_VERSION)), std::string::npos) << message;
+  EXPECT_NE(message.find("mtled-material-abi_mismatch.so"), std::string::npos) << message;
+}
+
+TEST(PluginCatalog, RefusesAnotherBuildFingerprintAndSaysWhatDiffers) {
+  PluginCatalog catalog({kBad / "fingerprint"});
+  const std::string message = load_error(catalog, "fingerprint_mismatch");
+  EXPECT_NE(message.find("eigen_max_static_align_bytes: plugin 0, kernel"), std::string::npos) << message;
+}
+
+TEST(PluginCatalog, DuplicateComponentNamesBothFiles) {
+  PluginCatalog catalog({kBad / "good", kBad / "copy"});
+  ASSERT_EQ(catalog.duplicates().size(), 1u);
+  const std::string message = load_error(catalog, "good_test_material");
+  EXPECT_NE(message.find((kBad / "good").string()), std::string::npos) << message;
+  EXPECT_NE(message.find((kBad / "copy").string()), std::string::npos) << message;
+}
+
+TEST(PluginCatalog, UnknownComponentSuggestsTheClosestAndListsFolders) {
+  PluginCatalog catalog({kBad / "good"});
+  const std::string message = load_error(catalog, "good_test_materal");
+  EXPECT_NE(message.find("did you mean \"good_test_material\"?"), std::string::npos) << message;
+  EXPECT_NE(message.find((kBad / "good").string()), std::string::npos) << message;
+}
+
+TEST(PluginCatalog, ObjectsKeepTheirLibraryLoaded) {
+  std::shared_ptr<Material> material;
+  {
+    PluginCatalog catalog({kBad / "good"});
+    const ComponentDeclaration& d = catalog.load(Category::material, "good_test_material");
+    ASSERT_NE(d.find("region"), nullptr) << "the kernel's common material parameter joins the declaration";
+    std::vector<Problem> problems;
+    material = catalog.create<Material>("good_test_material", validate_parameters(d, {{"modulus", 5.0}}, "/m", problems));
+  }
+  // The catalog is gone; the library must still be loaded for the object to work and be destroyed.
+  Mat3 S;
+  ASSERT_TRUE(material->stress(2.0 * Mat3::Identity(), S));
+  EXPECT_DOUBLE_EQ(S(0, 0), 0.5 * 5.0 * 3.0);
+  material.reset();
+}
+
+TEST(PluginCatalog, AFactoryThatThrowsSurfacesAsAnException) {
+  PluginCatalog catalog({kBad / "throws"});
+  const ComponentDeclaration& d = catalog.load(Category::material, "throws_when_built");
+  std::vector<Problem> problems;
+  const Parameters p = validate_parameters(d, json::object(), "/m", problems);
+  try {
+    catalog.create<Material>("throws_when_built", p);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("deliberate failure"), std::string::npos);
+  }
+}
+
+TEST(PluginSearchPath, EnvironmentReplacesTheDefault) {
+  ::unsetenv("MTLED_PLUGIN_PATH");
+  auto path = plugin_search_path({"/cli"}, {"/scene"});
+  ASSERT_EQ(path.size(), 3u);
+  EXPECT_EQ(path[0], fs::path("/cli"));
+  EXPECT_EQ(path[1], fs::path("/scene"));
+  EXPECT_EQ(path[2], executable_directory().parent_path() / "lib" / "mtled" / "plugins");
+  ::setenv("MTLED_PLUGIN_PATH", "/a:/b", 1);
+  path = plugin_search_path({}, {});
+  EXPECT_EQ(path, (std::vector<fs::path>{"/a", "/b"}));
+  ::unsetenv("MTLED_PLUGIN_PATH");
+}
+
+}  // namespace
+}  // namespace mtled

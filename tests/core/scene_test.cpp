@@ -1,0 +1,107 @@
+// Reading and validating scenes: syntax errors with file:line:column, problems located by line, --set.
+#include <gtest/gtest.h>
+
+#include "mtled/scene.hpp"
+#include "test_support.hpp"
+
+namespace mtled {
+namespace {
+
+const char* kScene = R"({
+  "mesh": {"type": "no_such_mesh"},
+  "shape_function": {"type": "no_such_sf"},
+  "materails": [],
+  "materials": [
+    {"type": "good_test_material", "modulus": -3, "regon": "a"}
+  ],
+  "boundaries": [{"type": "fixd", "nodes": {"group": "bottom"}}],
+  "integrator": {"type": "dynamic_relaxation", "tolerance": 2}
+})";
+
+std::string problems_text(const InputError& e) {
+  std::string text;
+  for (const auto& p : e.problems()) text += p.format() + "\n";
+  return text;
+}
+
+TEST(Scene, SyntaxErrorsNameFileLineAndColumn) {
+  try {
+    parse_scene("{\n  \"mesh\": {\"type\": \"box\"},\n  \"materials\": [\n", "cut.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where.rfind("cut.json:4:", 0), 0u) << e.problems()[0].where;
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+  try {
+    parse_scene("{\"a\": 1,}", "comma.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "comma.json:1:9");
+  }
+  EXPECT_THROW(parse_scene("[1, 2]", "array.json"), InputError);
+  EXPECT_THROW(read_scene("/nonexistent/scene.json"), InputError);
+}
+
+TEST(Scene, EveryProblemIsLocatedByLine) {
+  PluginCatalog catalog({test::plugin_dir(), MTLED_TEST_BAD_PLUGIN_DIR "/good"});
+  try {
+    validate_scene(parse_scene(kScene, "scene.json"), catalog);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string text = problems_text(e);
+    EXPECT_NE(text.find("scene.json:4: /materails: unknown top-level key \"materails\"; did you mean \"materials\"?"),
+              std::string::npos)
+        << text;
+    EXPECT_NE(text.find("scene.json:2: /mesh/type: unknown mesh \"no_such_mesh\""), std::string::npos) << text;
+    EXPECT_NE(text.find("scene.json:6: /materials/0/modulus: -3 is out of range: allowed > 0 Pa"), std::string::npos)
+        << text;
+    EXPECT_NE(text.find("scene.json:6: /materials/0/regon: unknown key \"regon\""), std::string::npos) << text;
+    EXPECT_NE(text.find("did you mean \"region\"?"), std::string::npos) << text;
+    EXPECT_NE(text.find("scene.json:8: /boundaries/0/type: unknown boundary \"fixd\"; did you mean \"fixed\"?"),
+              std::string::npos)
+        << text;
+    EXPECT_NE(text.find("scene.json:9: /integrator/tolerance: 2 is out of range: allowed (0, 1)"), std::string::npos)
+        << text;
+  }
+  // Validation loaded only what it could name; nothing for the unknown types.
+  for (const auto& file : catalog.loaded_files()) EXPECT_EQ(file.find("fixd"), std::string::npos);
+}
+
+TEST(Scene, OverridesApplyBeforeValidationAndAreLocatedAsSuch) {
+  SceneDocument d = parse_scene(kScene, "scene.json", {"/integrator/tolerance=1e-5", "/shape_function/type=mls"});
+  EXPECT_DOUBLE_EQ(d.root["integrator"]["tolerance"].get<double>(), 1e-5);
+  EXPECT_EQ(d.root["shape_function"]["type"], "mls");
+  EXPECT_EQ(d.locate("/shape_function/type"), "--set /shape_function/type");
+  EXPECT_EQ(d.locate("/materials/0/modulus"), "scene.json:6: /materials/0/modulus");
+  EXPECT_EQ(d.locate("/materials/0/missing"), "scene.json:6: /materials/0/missing");  // closest ancestor
+  EXPECT_THROW(parse_scene(kScene, "scene.json", {"integrator/tolerance=1"}), InputError);
+  EXPECT_THROW(parse_scene(kScene, "scene.json", {"/materials/7/mu=1"}), InputError);  // past the array's end
+  EXPECT_EQ(parse_scene(kScene, "scene.json", {"/output/every_steps=5"}).root["output"]["every_steps"], 5);
+}
+
+TEST(Scene, CategoryMismatchIsAnUnknownType) {
+  PluginCatalog catalog({test::plugin_dir()});
+  try {
+    validate_scene(parse_scene(R"({"integrator": {"type": "fixed"}})", "s.json"), catalog);
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string text = problems_text(e);
+    EXPECT_NE(text.find("/integrator/type: unknown integrator \"fixed\""), std::string::npos) << text;
+    EXPECT_NE(text.find("/mesh: missing \"mesh\""), std::string::npos) << text;
+    EXPECT_NE(text.find("/materials: missing \"materials\""), std::string::npos) << text;
+  }
+}
+
+TEST(Scene, SchemaListsComponentsPerRole) {
+  PluginCatalog catalog({test::plugin_dir()});
+  const json schema = scene_json_schema(catalog);
+  bool found = false;
+  for (const auto& option : schema["properties"]["integrator"]["oneOf"])
+    found = found || option["properties"]["type"]["const"] == "dynamic_relaxation";
+  EXPECT_TRUE(found);
+  EXPECT_EQ(schema["properties"]["discretisation"]["properties"]["integration_points_per_tet"]["enum"],
+            json::array({1, 4}));
+}
+
+}  // namespace
+}  // namespace mtled

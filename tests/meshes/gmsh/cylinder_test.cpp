@@ -1,0 +1,137 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "generated_mesh_checks.hpp"
+#include "mtled/interfaces/mesh_source.hpp"
+#include "test_support.hpp"
+
+namespace mtled::test {
+namespace {
+
+TetMesh load(const std::string& generator, const json& block) {
+  auto source = make<MeshSource>(generator, block);
+  return kernel_ready(source->load(MeshContext{}));
+}
+
+TEST(GmshCylinder, NodeCountVolumeAndFaces) {
+  const double r = 0.015, h = 0.017;
+  const Vec3 base(0.01, -0.02, 0.005);
+  const TetMesh mesh = load(
+      "cylinder", {{"radius", r}, {"height", h}, {"base_center", {base[0], base[1], base[2]}}, {"target_nodes", 2500}});
+  EXPECT_NEAR(mesh.node_count(), 2500, 0.03 * 2500);
+  const double exact = std::numbers::pi * r * r * h;
+  const double bound = inscribed_deficit_bound(longest_boundary_edge(mesh), r);
+  ASSERT_LT(bound, 0.05);  // the bound only means something while the faces are small against R
+  const double volume = mesh_volume(mesh);
+  EXPECT_LE(volume, exact * (1 + 1e-9));  // inscribed in a convex body
+  EXPECT_GE(volume, exact * (1 - bound));
+  EXPECT_EQ(mesh.region_names, std::vector<std::string>{"all"});
+
+  // Nodes on a face lie on it: planes up to round-off, the curved face to the accuracy of OCC's
+  // parametrisation (1e-9 of the radius is far above round-off and far below any mesh feature).
+  for (const Index n : node_set(mesh, "bottom")) EXPECT_NEAR(mesh.points[n][2], base[2], 1e-12);
+  for (const Index n : node_set(mesh, "top")) EXPECT_NEAR(mesh.points[n][2], base[2] + h, 1e-12);
+  for (const Index n : node_set(mesh, "side")) {
+    const Vec3 d = mesh.points[n] - base;
+    EXPECT_NEAR(std::hypot(d[0], d[1]), r, 1e-9 * r);
+  }
+  // Together they are the boundary nodes.
+  std::vector<char> in_sets(mesh.points.size(), 0);
+  for (const char* name : {"bottom", "top", "side"})
+    for (const Index n : node_set(mesh, name)) in_sets[static_cast<std::size_t>(n)] = 1;
+  EXPECT_EQ(in_sets, surface_nodes(mesh));
+}
+
+TEST(GmshCylinder, IsDeterministic) {
+  const json block = {{"radius", 0.015}, {"height", 0.017}, {"target_nodes", 1000}};
+  EXPECT_TRUE(identical(load("cylinder", block), load("cylinder", block)));
+}
+
+TEST(GmshCylinder, RefusesSizesCoarserThanTheRadius) {
+  // A needle-thin cylinder: 1,000 nodes would need a mesh size above the radius (a circle of under 6
+  // segments, on which Gmsh spends minutes). Refused before meshing, with the node count that would do.
+  auto thin = make<MeshSource>("cylinder", {{"radius", 1e-4}, {"height", 0.1}, {"target_nodes", 1000}});
+  const Problem few = input_error([&] { thin->load(MeshContext{}); });
+  EXPECT_EQ(few.where, "/test/target_nodes");
+  EXPECT_NE(few.message.find("ask for at least"), std::string::npos) << few.message;
+  auto coarse = make<MeshSource>("cylinder", {{"radius", 0.01}, {"height", 0.01}, {"mesh_size", 0.02}});
+  const Problem size = input_error([&] { coarse->load(MeshContext{}); });
+  EXPECT_EQ(size.where, "/test/mesh_size");
+  EXPECT_NE(size.message.find("at most 0.01 m"), std::string::npos) << size.message;
+}
+
+TEST(GmshLayeredCylinder, LayersAreRegionsWithTheirVolumes) {
+  // The paper's large sample scaled down by 2, so that a small mesh still resolves the thin top layer.
+  const double r = 0.01625;
+  const std::vector<double> heights{0.009, 0.0045, 0.0035};
+  const TetMesh mesh = load("layered_cylinder", {{"radius", r},
+                                                 {"layer_heights", heights},
+                                                 {"layer_names", {"bottom_gel", "middle_gel", "top_gel"}},
+                                                 {"target_nodes", 3000}});
+  EXPECT_NEAR(mesh.node_count(), 3000, 0.03 * 3000);
+  EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"bottom_gel", "middle_gel", "top_gel"}));
+  const double bound = inscribed_deficit_bound(longest_boundary_edge(mesh), r);
+  const char* names[3] = {"bottom_gel", "middle_gel", "top_gel"};
+  for (int k = 0; k < 3; ++k) {
+    const double exact = std::numbers::pi * r * r * heights[static_cast<std::size_t>(k)];
+    const double volume = region_volume(mesh, names[k]);
+    EXPECT_LE(volume, exact * (1 + 1e-9)) << names[k];
+    EXPECT_GE(volume, exact * (1 - bound)) << names[k];
+  }
+  // Interfaces and faces at their heights; every interface node is shared by the tets of both layers
+  // (a conformal mesh), which shows as interface nodes that are not on the outer surface.
+  const double levels[4] = {0.0, 0.009, 0.0135, 0.017};
+  const char* planes[4] = {"bottom", "interface1", "interface2", "top"};
+  const std::vector<char> surface = surface_nodes(mesh);
+  for (int k = 0; k < 4; ++k) {
+    std::size_t interior = 0;
+    for (const Index n : node_set(mesh, planes[k])) {
+      EXPECT_NEAR(mesh.points[n][2], levels[k], 1e-12) << planes[k];
+      interior += surface[static_cast<std::size_t>(n)] ? 0 : 1;
+    }
+    const bool is_interface = k == 1 || k == 2;
+    EXPECT_EQ(interior > 0, is_interface) << planes[k] << ": " << interior << " nodes inside the body";
+  }
+  for (const Index n : node_set(mesh, "side")) EXPECT_NEAR(mesh.points[n].head<2>().norm(), r, 1e-9 * r);
+  // No tet straddles an interface: every tet of layer k lies between its levels.
+  for (Index t = 0; t < mesh.tet_count(); ++t) {
+    const auto layer = static_cast<std::size_t>(mesh.tet_region[t]);
+    for (const Index n : mesh.tets[t]) {
+      EXPECT_GE(mesh.points[n][2], levels[layer] - 1e-12);
+      EXPECT_LE(mesh.points[n][2], levels[layer + 1] + 1e-12);
+    }
+  }
+}
+
+TEST(GmshLayeredCylinder, DefaultNamesAndOneLayer) {
+  const TetMesh mesh =
+      load("layered_cylinder", {{"radius", 0.01}, {"layer_heights", {0.01, 0.005}}, {"target_nodes", 800}});
+  EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"layer1", "layer2"}));
+  EXPECT_EQ(mesh.node_sets.count("interface1"), 1u);
+  EXPECT_EQ(mesh.node_sets.count("interface2"), 0u);
+  const TetMesh single = load("layered_cylinder", {{"radius", 0.01}, {"layer_heights", {0.01}}, {"target_nodes", 500}});
+  EXPECT_EQ(single.region_names, std::vector<std::string>{"layer1"});
+  for (const char* name : {"bottom", "top", "side"}) EXPECT_EQ(single.node_sets.count(name), 1u) << name;
+}
+
+TEST(GmshLayeredCylinder, RejectsBadLayerNames) {
+  const Problem count = input_error([] {
+    make<MeshSource>("layered_cylinder", {{"radius", 0.01}, {"layer_heights", {0.01, 0.005}}, {"layer_names", {"a"}}});
+  });
+  EXPECT_EQ(count.where, "/test/layer_names");
+  EXPECT_NE(count.message.find("one name per"), std::string::npos) << count.message;
+  const Problem twice = input_error([] {
+    make<MeshSource>("layered_cylinder",
+                     {{"radius", 0.01}, {"layer_heights", {0.01, 0.005}}, {"layer_names", {"gel", "gel"}}});
+  });
+  EXPECT_EQ(twice.where, "/test/layer_names/1");
+  const Problem none = input_error([] {
+    make<MeshSource>("layered_cylinder", {{"radius", 0.01}, {"layer_heights", json::array()}});
+  });
+  EXPECT_EQ(none.where, "/test/layer_heights");
+}
+
+}  // namespace
+}  // namespace mtled::test

@@ -1,0 +1,93 @@
+// The same cube in every format gives the same mesh, and every reader's output passes the kernel's
+// remove_unused_nodes and check_mesh, as a scene run does with it.
+#include "reader_test_support.hpp"
+
+namespace mtled::test {
+namespace {
+
+struct Reading {
+  std::string reader;
+  json block;
+  std::map<std::string, std::string> rename;  // region names of formats that only number regions
+};
+
+std::vector<Reading> cube_readings() {
+  const std::map<std::string, std::string> numbered = {{"1", "left"}, {"2", "right"}};
+  return {{"gmsh_file", {{"path", "cube_msh22.msh"}}, {}},
+          {"gmsh_file", {{"path", "cube_msh41.msh"}}, {}},
+          {"vtk_file", {{"path", "cube.vtk"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"vtk_file", {{"path", "cube_appended.vtu"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"abaqus_file", {{"path", "cube.inp"}}, {}}};
+}
+
+TEST(CrossFormat, TheCubeIsTheSameMeshInEveryFormat) {
+  const CanonicalMesh reference = reference_cube();
+  ASSERT_EQ(reference.points.size(), 12u);
+  ASSERT_EQ(reference.regions.at("left").size(), 6u);
+  for (const auto& reading : cube_readings()) {
+    const TetMesh mesh = read_mesh(reading.reader, reading.block);
+    EXPECT_EQ(canonical(mesh, reading.rename), reference) << reading.reader << " " << reading.block.dump();
+  }
+}
+
+TEST(CrossFormat, EveryReadersMeshPassesCheckMesh) {
+  for (const auto& reading : cube_readings()) {
+    TetMesh mesh = read_mesh(reading.reader, reading.block);
+    remove_unused_nodes(mesh);
+    ASSERT_NO_THROW(check_mesh(mesh, true)) << reading.reader << " " << reading.block.dump();
+    // After check_mesh every tet is right-handed; the two boxes fill the unit cube (exact in binary
+    // arithmetic up to rounding of 12 small sums).
+    for (Index t = 0; t < mesh.tet_count(); ++t) EXPECT_GT(tet_volume(mesh, t), 0.0);
+    EXPECT_NEAR(total_volume(mesh), 1.0, 1e-14) << reading.reader;
+    EXPECT_EQ(mesh.tet_region.size(), mesh.tets.size());
+  }
+  // Gmsh-made meshes with surface, line and point elements beside the tets, through all three readers.
+  for (const auto& [reader, block] :
+       std::vector<std::pair<std::string, json>>{{"gmsh_file", {{"path", "cube_gmsh41_all.msh"}}},
+                                                 {"gmsh_file", {{"path", "cube_gmsh22.msh"}}},
+                                                 {"vtk_file", {{"path", "cube_gmsh.vtk"}}},
+                                                 {"abaqus_file", {{"path", "cube_gmsh.inp"}}}}) {
+    TetMesh mesh = read_mesh(reader, block);
+    remove_unused_nodes(mesh);
+    ASSERT_NO_THROW(check_mesh(mesh, true)) << reader << " " << block.dump();
+    EXPECT_NEAR(total_volume(mesh), 1.0, 1e-12) << reader << " " << block.dump();
+  }
+}
+
+TEST(CrossFormat, EmptyAndMissingFilesInEveryReader) {
+  const auto dir = scratch_dir("cross_format/empty");
+  for (const auto& [reader, file] : std::vector<std::pair<std::string, std::string>>{
+           {"gmsh_file", "m.msh"}, {"vtk_file", "m.vtk"}, {"vtk_file", "m.vtu"}, {"abaqus_file", "m.inp"}}) {
+    write_text(dir / file, "");
+    InputError error = read_error(reader, {{"path", file}}, dir);
+    EXPECT_EQ(where_of(error), (dir / file).string()) << reader;
+    EXPECT_NE(message_of(error).find("the mesh file is empty"), std::string::npos) << message_of(error);
+    // Missing: the error is at the scene's "path", names the resolved file and suggests the close name.
+    error = read_error(reader, {{"path", "n" + file.substr(1)}}, dir);
+    EXPECT_EQ(where_of(error), "/test/path") << reader;
+    EXPECT_NE(message_of(error).find((dir / ("n" + file.substr(1))).string() + " does not exist"), std::string::npos)
+        << message_of(error);
+    EXPECT_NE(message_of(error).find("did you mean \"" + file + "\""), std::string::npos) << message_of(error);
+  }
+}
+
+TEST(CrossFormat, DeclarationsAndExampleBlocks) {
+  // Each reader's example names a fixture of this folder by its path from the source tree's root: read with
+  // the source tree as the scene's folder, it gives a valid mesh of the unit cube.
+  for (const std::string reader : {"gmsh_file", "vtk_file", "abaqus_file"}) {
+    const ComponentDeclaration& declaration = catalog().load(Category::mesh, reader);
+    EXPECT_FALSE(declaration.summary().empty()) << reader;
+    for (const auto& spec : declaration.parameters()) {
+      EXPECT_FALSE(spec.doc.empty()) << reader << "." << spec.name;
+      EXPECT_FALSE(spec.unit.empty()) << reader << "." << spec.name;
+    }
+    ASSERT_FALSE(declaration.example().contains("type")) << reader;
+    TetMesh mesh = read_mesh(reader, declaration.example(), source_dir());
+    remove_unused_nodes(mesh);
+    ASSERT_NO_THROW(check_mesh(mesh, true)) << reader;
+    EXPECT_NEAR(total_volume(mesh), 1.0, 1e-12) << reader;
+  }
+}
+
+}  // namespace
+}  // namespace mtled::test

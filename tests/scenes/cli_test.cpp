@@ -1,0 +1,163 @@
+// The command line's contract (DESIGN.md Part 1): exit codes, messages that name the JSON pointer or the
+// file, the plugin search path, and summary.json's plugins_loaded.
+#include <gtest/gtest.h>
+
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace mtled {
+namespace {
+
+const fs::path kSmallCube = test::source_dir() / "tests/scenes/data/small_cube.json";
+
+// A scene file derived from the small cube with one change, written to the test's scratch folder.
+fs::path variant(const std::string& name, const std::function<void(json&)>& change) {
+  json scene = test::read_json(kSmallCube);
+  change(scene);
+  const fs::path file = test::scratch_dir("cli-" + name) / "scene.json";
+  test::write_text(file, scene.dump(2));
+  return file;
+}
+
+void expect_contains(const std::string& text, const std::string& part) {
+  EXPECT_NE(text.find(part), std::string::npos) << "expected \"" << part << "\" in:\n" << text;
+}
+
+TEST(Cli, RunsTheSmallCubeAndWritesTheContractOutputs) {
+  const fs::path out = test::scratch_dir("cli-run");
+  const auto result = test::run_mtled({"run", kSmallCube.string(), "-o", out.string(), "--threads", "2"});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const json summary = test::read_json(out / "summary.json");
+  EXPECT_EQ(summary["status"], "ok");
+  for (const char* key : {"mtled_version", "scene", "nodes", "integration_points", "steps", "time_step_s", "setup_time_s",
+                          "solve_time_s", "wall_time_s", "ip_updates_per_s", "peak_rss_mb", "plugins_loaded",
+                          "max_displacement_m"})
+    EXPECT_TRUE(summary.contains(key)) << key;
+  EXPECT_EQ(summary["plugins_loaded"],
+            json::array({"mtled-mesh-box.so", "mtled-shape_function-mls.so", "mtled-material-neo_hookean.so",
+                         "mtled-boundary-fixed.so", "mtled-boundary-prescribed_displacement.so",
+                         "mtled-integrator-dynamic_relaxation.so"}));
+  EXPECT_TRUE(fs::exists(out / "result.vtu"));
+  EXPECT_TRUE(fs::exists(out / "reactions.csv"));
+  EXPECT_FALSE(fs::exists(out / "needle.csv"));  // no needle, no needle output
+  expect_contains(test::read_text(out / "reactions.csv"), "time_s,set,fx_N,fy_N,fz_N");
+  for (const auto& entry : fs::directory_iterator(out))
+    EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+}
+
+TEST(Cli, ValidatePlugins_AndSchemaWork) {
+  auto result = test::run_mtled({"validate", kSmallCube.string()});
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  expect_contains(result.output, "valid");
+  result = test::run_mtled({"plugins", "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const json list = json::parse(result.output);
+  std::set<std::string> libraries;
+  for (const auto& component : list) {
+    for (const char* key : {"name", "category", "library", "parameters"}) EXPECT_TRUE(component.contains(key)) << key;
+    libraries.insert(component["library"].get<std::string>());
+    for (const auto& p : component["parameters"]) EXPECT_FALSE(p["doc"].get<std::string>().empty()) << component["name"];
+  }
+  EXPECT_EQ(libraries.size(), list.size()) << "each component is its own shared library";
+  result = test::run_mtled({"plugins", "--describe", "ogden"});
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  expect_contains(result.output, "`alpha`");
+  result = test::run_mtled({"schema"});
+  EXPECT_EQ(result.exit_code, 0);
+  const json schema = json::parse(result.output);
+  EXPECT_TRUE(schema.contains("properties"));
+}
+
+TEST(Cli, NegativeMuExitsTwoNamingTheKeyAndRange) {
+  const auto file = variant("negative-mu", [](json& s) { s["materials"][0]["mu"] = -1000; });
+  const auto result = test::run_mtled({"run", file.string(), "-o", (file.parent_path() / "out").string()});
+  EXPECT_EQ(result.exit_code, 2);
+  expect_contains(result.output, "/materials/0/mu: -1000 is out of range: allowed > 0 Pa");
+  EXPECT_FALSE(fs::exists(file.parent_path() / "out")) << "nothing written for an invalid scene";
+}
+
+TEST(Cli, MisspeltKeyAndTypeExitTwoWithSuggestions) {
+  auto file = variant("misspelt-key", [](json& s) {
+    s["materials"][0]["muu"] = s["materials"][0]["mu"];
+    s["materials"][0].erase("mu");
+  });
+  auto result = test::run_mtled({"validate", file.string()});
+  EXPECT_EQ(result.exit_code, 2);
+  expect_contains(result.output, "/materials/0/muu: unknown key \"muu\"");
+  expect_contains(result.output, "did you mean \"mu\"?");
+  expect_contains(result.output, "/materials/0/mu: required");
+
+  file = variant("misspelt-type", [](json& s) { s["materials"][0]["type"] = "neo_hooke"; });
+  result = test::run_mtled({"validate", file.string()});
+  EXPECT_EQ(result.exit_code, 2);
+  expect_contains(result.output, "/materials/0/type: unknown material \"neo_hooke\"; did you mean \"neo_hookean\"?");
+}
+
+TEST(Cli, TruncatedJsonExitsTwoNamingTheFileAndLine) {
+  const fs::path file = test::scratch_dir("cli-truncated") / "cut.json";
+  const std::string text = test::read_text(kSmallCube);
+  test::write_text(file, text.substr(0, text.size() / 2));
+  const auto result = test::run_mtled({"run", file.string()});
+  EXPECT_EQ(result.exit_code, 2);
+  expect_contains(result.output, "cut.json:");
+  expect_contains(result.output, "truncated");
+}
+
+TEST(Cli, PluginPathWithoutNeedlePlugins) {
+  // A folder holding every plugin except the needle models.
+  const fs::path folder = test::scratch_dir("cli-no-needle") / "plugins";
+  fs::create_directories(folder);
+  for (const auto& entry : fs::directory_iterator(test::plugin_dir()))
+    if (entry.path().filename().string().rfind("mtled-needle-", 0) != 0)
+      fs::create_symlink(entry.path(), folder / entry.path().filename());
+  const std::string env = "MTLED_PLUGIN_PATH=" + folder.string();
+
+  const fs::path out = folder.parent_path() / "out";
+  auto result = test::run_mtled({"run", kSmallCube.string(), "-o", out.string()}, {env});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const json loaded = test::read_json(out / "summary.json")["plugins_loaded"];
+  EXPECT_EQ(loaded.size(), 6u) << loaded.dump();
+  for (const auto& file : loaded) EXPECT_EQ(file.get<std::string>().find("needle"), std::string::npos);
+
+  const auto with_needle = variant("needle-missing", [](json& s) {
+    s["needle"] = {{"type", "kinematic"}, {"entry", {0.005, 0.005, 0.01}}, {"depth", 0.003}};
+  });
+  result = test::run_mtled({"run", with_needle.string(), "-o", (out / "needle").string()}, {env});
+  EXPECT_EQ(result.exit_code, 2) << result.output;
+  expect_contains(result.output, "/needle/type: unknown needle \"kinematic\"");
+  expect_contains(result.output, folder.string());
+}
+
+TEST(Cli, AnAbiMismatchedPluginIsRefused) {
+  const auto file = variant("abi", [](json& s) { s["materials"][0] = {{"type", "abi_mismatch"}}; });
+  const auto result = test::run_mtled(
+      {"validate", file.string(), "--plugin-path", MTLED_TEST_BAD_PLUGIN_DIR "/abi"});
+  EXPECT_EQ(result.exit_code, 2);
+  expect_contains(result.output, "built for mtled ABI version 999");
+}
+
+TEST(Cli, APluginThatThrowsWhileBeingBuiltExitsTwo) {
+  const auto file = variant("throws", [](json& s) { s["materials"][0] = {{"type", "throws_when_built"}}; });
+  const fs::path out = file.parent_path() / "out";
+  const auto result = test::run_mtled(
+      {"run", file.string(), "-o", out.string(), "--plugin-path", MTLED_TEST_BAD_PLUGIN_DIR "/throws"});
+  EXPECT_EQ(result.exit_code, 2) << result.output;
+  expect_contains(result.output, "scene.json:");
+  expect_contains(result.output, "/materials/0: material \"throws_when_built\" failed while being built");
+  const json summary = test::read_json(out / "summary.json");
+  EXPECT_EQ(summary["status"], "invalid_input");
+  EXPECT_FALSE(fs::exists(out / "result.vtu"));
+}
+
+TEST(Cli, OverridesAndUnknownCommands) {
+  const fs::path out = test::scratch_dir("cli-set") / "out";
+  auto result = test::run_mtled({"run", kSmallCube.string(), "-o", out.string(), "--set", "/materials/0/mu=-5"});
+  EXPECT_EQ(result.exit_code, 2);
+  expect_contains(result.output, "--set /materials/0/mu: -5 is out of range");
+  result = test::run_mtled({"frobnicate"});
+  EXPECT_EQ(result.exit_code, 2);
+}
+
+}  // namespace
+}  // namespace mtled

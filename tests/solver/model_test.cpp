@@ -1,0 +1,216 @@
+// The meshless model and the essential-boundary-condition projection, on irregular clouds, through the real
+// plugins: mass, forces, thread independence, discrete energy consistency, constraints to round-off.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <random>
+
+#include "mtled/constraints.hpp"
+#include "mtled/model.hpp"
+#include "test_support.hpp"
+
+namespace mtled {
+namespace {
+
+constexpr double kMu = 1000.0;
+constexpr double kD = 4.02684e-5;  // nu = 0.49
+
+std::unique_ptr<Model> make_model(const std::string& shape_function = "mls", double jitter = 0.25, int n = 5,
+                                  const std::string& material = "neo_hookean", bool consistent = true) {
+  TetMesh mesh = test::box_mesh(Vec3(0.01, 0.01, 0.01), n, n, n, jitter, 7);
+  const auto sf = test::make<ShapeFunctions>(shape_function, json::object());
+  json parameters = {{"mu", kMu}, {"D", kD}, {"density", 1000.0}};
+  if (material == "ogden") parameters["alpha"] = -1.3;
+  const auto m = test::make<Material>(material, parameters);
+  Model::Options options;
+  options.consistent_integration = consistent;
+  return std::make_unique<Model>(std::move(mesh), sf, std::vector<std::shared_ptr<const Material>>{m}, options);
+}
+
+std::vector<double> random_field(Index nodes, double amplitude, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> uniform(-amplitude, amplitude);
+  std::vector<double> u(3 * static_cast<std::size_t>(nodes));
+  for (auto& v : u) v = uniform(random);
+  return u;
+}
+
+double max_abs(const std::vector<double>& v) {
+  double m = 0.0;
+  for (double x : v) m = std::max(m, std::abs(x));
+  return m;
+}
+
+TEST(Model, LumpedMassIsTheBodyMass) {
+  const auto model = make_model();
+  const auto mass = model->lumped_mass();
+  double total = 0.0;
+  for (double m : mass) {
+    EXPECT_GT(m, 0.0);
+    total += m;
+  }
+  EXPECT_NEAR(total, 1000.0 * 1e-6, 1e-15);  // rho V; every integration point gives away exactly rho w
+}
+
+TEST(Model, RigidMotionsCarryNoForce) {
+  // Linear reproduction makes F exactly the rotation, so S = 0 and f = 0 up to round-off, at any angle.
+  const auto model = make_model("mls");
+  const Eigen::AngleAxisd rotation(0.7, Vec3(1, 2, 3).normalized());
+  std::vector<double> u(3 * static_cast<std::size_t>(model->node_count()));
+  for (Index i = 0; i < model->node_count(); ++i) {
+    const Vec3 x = model->nodes()[i];
+    const Vec3 d = rotation * x - x + Vec3(0.003, -0.001, 0.002);
+    for (int c = 0; c < 3; ++c) u[3 * i + c] = d[c];
+  }
+  std::vector<double> f(u.size());
+  ASSERT_EQ(model->internal_forces(u, f), -1);
+  // Force scale of a 1% strain: mu * 0.01 * area of an integration cell.
+  const double scale = kMu * 0.01 * 4e-6;
+  EXPECT_LT(max_abs(f), 1e-9 * scale);
+  EXPECT_NEAR(model->strain_energy(u), 0.0, 1e-18);
+}
+
+TEST(Model, InternalForcesAreTheGradientOfTheDiscreteEnergy) {
+  // Without the integration correction (a Bubnov-Galerkin method), f_I = sum w F S grad N_I must equal
+  // dE/du_I, E = sum w W(F(u)): checks the assembly, the CSR storage and the materials together. Central differences: error O(h^2 E''') + O(eps E / h); h = 1e-8 m on u ~ 1e-4 m.
+  for (const std::string material : {"neo_hookean", "ogden"}) {
+    const auto model = make_model("mls", 0.25, 4, material, /*consistent=*/false);
+    auto u = random_field(model->node_count(), 2e-4, 3);
+    std::vector<double> f(u.size());
+    ASSERT_EQ(model->internal_forces(u, f), -1);
+    const double h = 1e-8;
+    double worst = 0.0;
+    for (std::size_t i = 0; i < u.size(); i += 17) {
+      const double saved = u[i];
+      u[i] = saved + h;
+      const double plus = model->strain_energy(u);
+      u[i] = saved - h;
+      const double minus = model->strain_energy(u);
+      u[i] = saved;
+      worst = std::max(worst, std::abs((plus - minus) / (2 * h) - f[i]));
+    }
+    EXPECT_LT(worst, 1e-6 * max_abs(f)) << material;
+  }
+}
+
+TEST(Model, ConsistentIntegrationBalancesAHomogeneousStressWithNodalBoundaryTerms) {
+  // With the correction, sum_ip w (grad N_I + xi_I) = sum_K N_I(X_K) A_K (A_K: a third of the outward area of
+  // the boundary faces at node K). So for an affine field (uniform P), f_I = sum_K N_I(X_K) P A_K: nodal
+  // boundary terms that reactions or zero tractions balance exactly. This is the discrete patch test.
+  for (const std::string& sf : test::catalog().names(Category::shape_function)) {
+    const auto model = make_model(sf, 0.3, 4);
+    Mat3 G;
+    G << 0.02, 0.01, -0.03, 0.0, -0.05, 0.01, 0.02, 0.0, 0.04;
+    std::vector<double> u(3 * static_cast<std::size_t>(model->node_count()));
+    for (Index i = 0; i < model->node_count(); ++i) {
+      const Vec3 d = G * model->nodes()[i];
+      for (int c = 0; c < 3; ++c) u[3 * i + c] = d[c];
+    }
+    std::vector<double> f(u.size());
+    ASSERT_EQ(model->internal_forces(u, f), -1);
+    Mat3 S;
+    const Mat3 F = Mat3::Identity() + G;
+    ASSERT_TRUE(model->ip_material(0).stress(F, S));
+    const Mat3 P = F * S;
+    std::vector<Vec3> area(static_cast<std::size_t>(model->node_count()), Vec3::Zero());
+    for (const auto& face : boundary_faces(model->mesh())) {
+      const Vec3& a = model->nodes()[face[0]];
+      const Vec3 share = (model->nodes()[face[1]] - a).cross(model->nodes()[face[2]] - a) / 6.0;
+      for (Index v : face) area[v] += share;
+    }
+    std::vector<double> expected(u.size(), 0.0);
+    const SupportRows& psi = model->node_interpolation();
+    for (Index k = 0; k < model->node_count(); ++k) {
+      for (std::int64_t e = psi.offsets[k]; e < psi.offsets[k + 1]; ++e) {
+        const Vec3 term = psi.values[e] * (P * area[k]);
+        for (int c = 0; c < 3; ++c) expected[3 * static_cast<std::size_t>(psi.nodes[e]) + c] += term[c];
+      }
+    }
+    double difference = 0.0;
+    for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(f[i] - expected[i]));
+    EXPECT_LT(difference, 1e-10 * max_abs(f)) << sf;
+  }
+}
+
+TEST(Model, ForcesDoNotDependOnTheThreadCount) {
+  const auto model = make_model("mls", 0.3, 6);
+  const auto u = random_field(model->node_count(), 3e-4, 11);
+  std::vector<double> one(u.size()), two(u.size());
+  const int saved = omp_get_max_threads();
+  omp_set_num_threads(1);
+  model->internal_forces(u, one);
+  omp_set_num_threads(2);
+  model->internal_forces(u, two);
+  omp_set_num_threads(saved);
+  // Summation order differs only across the two per-thread buffers: a few ulps of the largest force.
+  double difference = 0.0;
+  for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(one[i] - two[i]));
+  EXPECT_LE(difference, 1e-13 * max_abs(one));
+  EXPECT_GT(max_abs(one), 0.0);
+}
+
+TEST(Model, InvertedMaterialIsReportedNotHidden) {
+  const auto model = make_model();
+  std::vector<double> u(3 * static_cast<std::size_t>(model->node_count()));
+  for (Index i = 0; i < model->node_count(); ++i) u[3 * i + 2] = -2.0 * model->nodes()[i][2];  // F_zz = -1
+  std::vector<double> f(u.size());
+  EXPECT_EQ(model->internal_forces(u, f), 0);  // the first integration point, whatever the thread count
+}
+
+TEST(Model, StableTimeStepScalesWithNodeSpacing) {
+  // dt = 2 / (c sqrt(n sum |grad N|^2)) ~ h / c: halving the spacing halves the step.
+  const auto coarse = make_model("mls", 0.0, 4);
+  const auto fine = make_model("mls", 0.0, 8);
+  const auto min_of = [](const Model& m) {
+    const auto& dt = m.ip_critical_time_steps();
+    return *std::min_element(dt.begin(), dt.end());
+  };
+  const double ratio = min_of(*coarse) / min_of(*fine);
+  EXPECT_NEAR(ratio, 2.0, 0.1);
+  // And it is below the dilatational wave's transit time across one cell.
+  const double c = std::sqrt((2.0 / kD + 4.0 / 3.0 * kMu) / 1000.0);
+  EXPECT_LT(min_of(*coarse), 0.01 / 4 / c);
+}
+
+class ConstraintsTest : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ConstraintsTest, InterpolatedDisplacementEqualsThePrescribedOneToRoundOff) {
+  const auto model = make_model(GetParam(), 0.3, 5);
+  auto u = random_field(model->node_count(), 1e-3, 5);
+  const auto mass = model->lumped_mass();
+  NodalConstraints all, some;
+  all.name = "all";
+  some.name = "some";
+  some.components = {false, false, true};
+  std::mt19937 random(9);
+  std::uniform_real_distribution<double> uniform(-1e-3, 1e-3);
+  for (Index i = 0; i < model->node_count(); i += 5) {
+    NodalConstraints& set = (i % 2 == 0) ? all : some;
+    set.nodes.push_back(i);
+    set.values.emplace_back(uniform(random), uniform(random), uniform(random));
+  }
+  ConstraintSystem constraints(*model);
+  constraints.update({&all, &some}, mass, true);
+  const auto before = u;
+  constraints.enforce(u, 1.0);
+  for (const NodalConstraints* set : {&all, &some}) {
+    for (std::size_t k = 0; k < set->nodes.size(); ++k) {
+      const Vec3 v = model->interpolate_node(set->nodes[k], u);
+      for (int c = 0; c < 3; ++c) {
+        if (!set->components[c]) continue;
+        EXPECT_NEAR(v[c], set->values[k][c], 1e-15) << set->name << " node " << set->nodes[k];
+      }
+    }
+  }
+  // Unconstrained components of "some" are not forced to anything: x and y keep their own interpolant.
+  // The correction is the M-orthogonal projection: the reactions lambda satisfy M du = Phi^T lambda.
+  std::vector<double> force(u.size(), 0.0);
+  constraints.add_constraint_forces(force);
+  for (std::size_t i = 0; i < u.size(); ++i) EXPECT_NEAR(mass[i / 3] * (u[i] - before[i]), force[i], 1e-18);
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryShapeFunction, ConstraintsTest,
+                         ::testing::ValuesIn(test::catalog().names(Category::shape_function)));
+
+}  // namespace
+}  // namespace mtled
