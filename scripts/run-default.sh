@@ -1,0 +1,6 @@
+#!/usr/bin/env bash
+# Quick start, first command: install, build, run the default scene into out/default.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+build/bin/mtled run share/scenes/uniaxial_cube_neohookean.json -o out/default
