@@ -3,4 +3,4 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
-build/bin/mtled run share/scenes/uniaxial_cube_neohookean.json -o out/default
+build/bin/mtled run share/scenes/needle_small_sample.json -o out/default

@@ -268,7 +268,8 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
   const Index n = integration_point_count();
   const std::size_t dofs = 3 * static_cast<std::size_t>(node_count());
   Index first_bad = std::numeric_limits<Index>::max();
-#pragma omp parallel reduction(min : first_bad)
+  // The team is the one the per-thread buffers were sized for, whatever a plugin did to OpenMP since.
+#pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
   {
     std::vector<double>& local = thread_forces_[static_cast<std::size_t>(omp_get_thread_num())];
     std::fill(local.begin(), local.end(), 0.0);

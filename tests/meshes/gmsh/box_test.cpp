@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <chrono>
 
 #include "generated_mesh_checks.hpp"
@@ -27,6 +29,14 @@ TEST(GmshBox, HitsTheTargetNodeCountAndTheExactVolume) {
   // Flat faces are meshed exactly: only round-off separates the tets' volume from a * b * c.
   EXPECT_NEAR(mesh_volume(mesh), size.prod(), 1e-9 * size.prod());
   EXPECT_EQ(mesh.region_names, std::vector<std::string>{"all"});
+}
+
+// Gmsh sets the process-wide OpenMP thread count when it initialises; the generator must give it back, or the
+// solver that runs after the mesh is built would silently run on one thread.
+TEST(GmshBox, LeavesTheOpenMpThreadCountAsItFoundIt) {
+  omp_set_num_threads(3);
+  (void)load_box({{"size", {0.01, 0.01, 0.01}}, {"target_nodes", 300}});
+  EXPECT_EQ(omp_get_max_threads(), 3);
 }
 
 TEST(GmshBox, FaceNodeSetsLieOnTheirFaces) {

@@ -1,6 +1,7 @@
 #include "support/gmsh_session.hpp"
 
 #include <gmsh.h>
+#include <omp.h>
 
 #include "mtled/log.hpp"
 
@@ -8,12 +9,13 @@ namespace mtled {
 
 GmshError::~GmshError() = default;
 
-GmshSession::GmshSession() {
+GmshSession::GmshSession() : host_threads_(omp_get_max_threads()) {
   gmsh_checked([] { gmsh::initialize(0, nullptr, /*readConfigFiles=*/false); });
   try {
     set_options();
   } catch (...) {
     gmsh::finalize();  // the destructor does not run when the constructor throws
+    omp_set_num_threads(host_threads_);
     throw;
   }
 }
@@ -50,6 +52,7 @@ GmshSession::~GmshSession() {
   } catch (...) {
     // A destructor must not throw; Gmsh's state is released by then.
   }
+  omp_set_num_threads(host_threads_);  // Gmsh sets the process-wide OpenMP thread count to its own
 }
 
 }  // namespace mtled

@@ -28,6 +28,7 @@ class GmshSession {
 
  private:
   static void set_options();
+  int host_threads_;  // OpenMP threads before Gmsh changed them, restored on finalise
 };
 
 // Gmsh's error messages as exceptions of a known type.
