@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <chrono>
 #include <csignal>
 #include <thread>
@@ -166,7 +167,10 @@ int run_scene(const RunOptions& options) {
   const OutputFolder folder(output);
   folder.clear_previous_outputs();
 
-  const int threads = options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // --threads, else OMP_NUM_THREADS when set (the OpenMP convention), else every core.
+  const int threads = options.threads > 0               ? options.threads
+                      : std::getenv("OMP_NUM_THREADS") ? omp_get_max_threads()
+                                                        : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   omp_set_num_threads(threads);
 
   json summary = {{"status", "running"},
