@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,22 @@ struct RunOptions {
   bool progress = true;
 };
 
+struct CompareOptions {
+  std::filesystem::path a, b;       // run folders or result .vtu files
+  bool json = false;                // machine-readable output
+  std::filesystem::path histogram;  // SVG of the node-by-node differences, when set
+  int bins = 41;
+};
+
+struct StudyOptions {
+  std::filesystem::path study;   // STUDY.json
+  std::filesystem::path output;  // the study's folder
+  int threads = 0;               // passed to every run; 0: the study file's "threads", else the run's default
+  bool reuse = false;            // keep runs whose folder already holds an "ok" result of the same settings
+  std::vector<std::filesystem::path> plugin_paths;
+  std::string log_level = "info";  // passed to every run
+};
+
 // Each returns the process exit code (0 ok, 2 invalid input, 3 instability, 1 anything else); InputError
 // and other exceptions propagate to main, which prints them and picks the code.
 int run_scene(const RunOptions& options);
@@ -26,5 +43,18 @@ int validate_scene_command(const SceneOptions& options);
 int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as_json, bool as_markdown,
                  const std::string& describe);
 int print_schema(const std::vector<std::filesystem::path>& plugin_paths);
+int compare_command(const CompareOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
+int study_command(const StudyOptions& options);
+
+}  // namespace mtled::app
+
+namespace mtled {
+struct Comparison;
+}
+
+namespace mtled::app {
+// Histograms of a comparison's node-by-node differences, one panel per component (SVG).
+void write_comparison_histograms(std::ostream& out, const Comparison& comparison, const std::string& name_a,
+                                 const std::string& name_b, int bins);
 
 }  // namespace mtled::app

@@ -26,7 +26,7 @@ int main(int argc, char** argv) {
   run_cmd->add_option("scene", run.scene.scene, "scene file (JSON)")->required();
   run_cmd->add_option("-o,--output", run.output, "output folder (default: out/<scene name>)");
   run_cmd->add_option("--set", run.scene.overrides, "override a scene value: /json/pointer=value (repeatable)");
-  run_cmd->add_option("--threads", run.threads, "threads for the force loop (default: all cores)")
+  run_cmd->add_option("--threads", run.threads, "threads for the force loop (default: OMP_NUM_THREADS when set, else all cores)")
       ->check(CLI::NonNegativeNumber);
   run_cmd->add_flag("!--no-progress", run.progress, "no progress display (it only shows on a terminal anyway)");
 
@@ -44,6 +44,26 @@ int main(int argc, char** argv) {
 
   auto* schema_cmd = cli.add_subcommand("schema", "print the JSON Schema of scenes (for editors)");
 
+  app::CompareOptions compare;
+  auto* compare_cmd = cli.add_subcommand(
+      "compare", "NRMSE per displacement component between two runs (A interpolated onto B's nodes when they differ)");
+  compare_cmd->add_option("run_a", compare.a, "run folder (or result .vtu) A")->required();
+  compare_cmd->add_option("run_b", compare.b, "run folder (or result .vtu) B: the reference, whose nodes are used")
+      ->required();
+  compare_cmd->add_flag("--json", compare.json, "machine-readable output");
+  compare_cmd->add_option("--histogram", compare.histogram, "write histograms of u_A - u_B per component (SVG)");
+  compare_cmd->add_option("--bins", compare.bins, "histogram bins (default 41)")->check(CLI::PositiveNumber);
+
+  app::StudyOptions study;
+  auto* study_cmd = cli.add_subcommand("study", "run a sweep of scene settings against a reference (docs/studies.md)");
+  study_cmd->add_option("study", study.study, "study file (JSON)")->required();
+  study_cmd->add_option("-o,--output", study.output, "the study's folder (study.csv, study.json, error_vs_time.svg, runs/)")
+      ->required();
+  study_cmd->add_option("--threads", study.threads, "threads for every run (default: the study's \"threads\", else all)")
+      ->check(CLI::NonNegativeNumber);
+  study_cmd->add_flag("--reuse", study.reuse,
+                      "keep runs whose folder already holds a successful result of the same scene and settings");
+
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -51,13 +71,16 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : 2;
   }
   set_log_level(log_level);
-  run.scene.plugin_paths = validate.plugin_paths = plugin_paths;
+  run.scene.plugin_paths = validate.plugin_paths = study.plugin_paths = plugin_paths;
+  study.log_level = log_level;
 
   try {
     if (*run_cmd) return app::run_scene(run);
     if (*validate_cmd) return app::validate_scene_command(validate);
     if (*plugins_cmd) return app::list_plugins(plugin_paths, as_json, as_markdown, describe);
     if (*schema_cmd) return app::print_schema(plugin_paths);
+    if (*compare_cmd) return app::compare_command(compare, plugin_paths);
+    if (*study_cmd) return app::study_command(study);
   } catch (const InputError& e) {
     for (const auto& problem : e.problems()) log().error("{}", problem.format());
     return 2;

@@ -2,8 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 
+#include "mtled/errors.hpp"
 #include "mtled/output.hpp"
 #include "mtled/point_search.hpp"
 
@@ -11,9 +14,33 @@ namespace fs = std::filesystem;
 
 namespace mtled {
 
-namespace {
-fs::path result_file(const fs::path& run) { return fs::is_directory(run) ? run / "result.vtu" : run; }
-}  // namespace
+const char* const kNrmseDefinition =
+    "NRMSE = RMSE(u_A - u_B) / (max u_B - min u_B) per displacement component over B's nodes, "
+    "RMSE = sqrt(mean of the squared node-by-node differences); A is interpolated onto B's nodes (MLS) when "
+    "the node clouds differ. The paper prints the 1/N outside the root (a typo: that value shrinks with the "
+    "node count); nrmse_paper_formula gives that literal value, NRMSE / sqrt(N).";
+
+fs::path result_file_of(const fs::path& run) {
+  std::error_code ec;
+  if (!fs::exists(run, ec))
+    throw InputError(run.string(), "no such run folder or result file");
+  if (!fs::is_directory(run, ec)) return run;
+  const fs::path file = run / "result.vtu";
+  if (fs::exists(file, ec)) return file;
+  std::string status;
+  if (std::ifstream in(run / "summary.json"); in) {
+    try {
+      status = json::parse(in).value("status", "");
+    } catch (const std::exception&) {
+      status.clear();
+    }
+  }
+  throw InputError(file.string(), status.empty() || status == "ok"
+                                      ? "missing: not an mtled run folder, or its run did not finish"
+                                      : fmt::format("missing: the run's summary.json says status \"{}\", so it wrote "
+                                                    "no result",
+                                                    status));
+}
 
 std::vector<Vec3> interpolate_displacements(const std::vector<Vec3>& nodes, const std::vector<Vec3>& displacement,
                                             const std::vector<Vec3>& points, PluginCatalog& catalog) {
@@ -62,10 +89,13 @@ std::vector<Vec3> interpolate_displacements(const std::vector<Vec3>& nodes, cons
 }
 
 Comparison compare_runs(const fs::path& a, const fs::path& b, PluginCatalog& catalog) {
-  const ResultField field_a = read_result_vtu(result_file(a));
-  const ResultField field_b = read_result_vtu(result_file(b));
   Comparison c;
+  c.file_a = result_file_of(a);
+  c.file_b = result_file_of(b);
+  const ResultField field_a = read_result_vtu(c.file_a);
+  const ResultField field_b = read_result_vtu(c.file_b);
   c.nodes = static_cast<Index>(field_b.points.size());
+  c.nodes_a = static_cast<Index>(field_a.points.size());
 
   Vec3 lo = field_b.points.front(), hi = lo;
   for (const auto& x : field_b.points) {
@@ -95,6 +125,24 @@ Comparison compare_runs(const fs::path& a, const fs::path& b, PluginCatalog& cat
     c.nrmse[k] = c.range[k] > 0.0 ? c.rmse[k] / c.range[k] : (c.rmse[k] == 0.0 ? 0.0 : INFINITY);
   }
   return c;
+}
+
+json comparison_json(const Comparison& c) {
+  auto components = [](const Vec3& v) { return json{{"ux", v[0]}, {"uy", v[1]}, {"uz", v[2]}}; };
+  const double root_n = std::sqrt(static_cast<double>(std::max<Index>(c.nodes, 1)));
+  return {{"nrmse", components(c.nrmse)},
+          {"rmse_m", components(c.rmse)},
+          {"max_abs_difference_m", components(c.max_abs_difference)},
+          {"range_m", components(c.range)},
+          {"nrmse_paper_formula", components(c.nrmse / root_n)},
+          {"definition", kNrmseDefinition},
+          {"nodes", {{"a", c.nodes_a}, {"b", c.nodes}, {"compared", c.nodes}}},
+          {"interpolated", c.interpolated},
+          {"interpolation", c.interpolated ? json("mls, linear basis, on A's nodes; support radius 1.3 x the distance "
+                                                  "to the 10th nearest node of A")
+                                           : json(nullptr)},
+          {"run_a", c.file_a.string()},
+          {"run_b", c.file_b.string()}};
 }
 
 }  // namespace mtled

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
-#include <regex>
 #include <sstream>
 
 #include "mtled/errors.hpp"
@@ -121,11 +120,11 @@ ResultField read_result_vtu(const fs::path& file) {
   std::string line;
   int line_number = 0;
   std::vector<Vec3>* target = nullptr;
-  static const std::regex displacement_header(R"(<DataArray[^>]*Name="displacement")");
   while (std::getline(in, line)) {
     ++line_number;
     if (line.rfind("<DataArray", 0) == 0) {
-      if (std::regex_search(line, displacement_header)) {
+      const std::string tag = line.substr(0, line.find('>'));
+      if (tag.find("Name=\"displacement\"") != std::string::npos) {
         target = &result.displacement;
       } else if (line.find("NumberOfComponents=\"3\"") != std::string::npos && line.find("Name=") == std::string::npos) {
         target = &result.points;

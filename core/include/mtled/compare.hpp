@@ -5,12 +5,15 @@
 #include <filesystem>
 #include <vector>
 
+#include "mtled/json.hpp"
 #include "mtled/plugin_catalog.hpp"
 
 namespace mtled {
 
 struct Comparison {
+  std::filesystem::path file_a, file_b;  // the result files read
   Index nodes = 0;            // B's nodes, where the fields are compared
+  Index nodes_a = 0;          // A's nodes
   bool interpolated = false;  // true when A was interpolated onto B's nodes (different clouds)
   // Per component x, y, z. NRMSE = RMSE(u_A - u_B) / (max u_B - min u_B), RMSE = sqrt(mean of squares):
   // the usual normalised root-mean-square error (the paper prints the 1/N outside the root; we read that
@@ -22,10 +25,22 @@ struct Comparison {
   std::vector<Vec3> differences;  // u_A - u_B at each of B's nodes (m)
 };
 
+// The definition compare_runs computes, in words (for reports and compare --json).
+extern const char* const kNrmseDefinition;
+
 // `a` and `b` are run folders (holding result.vtu) or result .vtu files. Interpolation uses the catalog's
 // "mls" shape functions (linear basis) on A's nodes, each with a support radius of 1.3 times the distance
-// to its 10th nearest neighbour (about 20 nodes per support).
+// to its 10th nearest neighbour (about 20 nodes per support). A missing folder or result file, or a
+// folder whose run did not finish, throws InputError naming the path.
 Comparison compare_runs(const std::filesystem::path& a, const std::filesystem::path& b, PluginCatalog& catalog);
+
+// The result file of a run folder (folder/result.vtu) or the file itself; InputError naming the path when
+// it does not exist (with the run's status from summary.json when the folder has one).
+std::filesystem::path result_file_of(const std::filesystem::path& run);
+
+// What `mtled compare --json` prints: nrmse, rmse_m, max_abs_difference_m, range_m (each {ux, uy, uz}),
+// nrmse_paper_formula, definition, nodes {a, b, compared}, interpolated, interpolation, run_a, run_b.
+json comparison_json(const Comparison& comparison);
 
 // The displacement differences of A carried onto points: exposed for tests.
 std::vector<Vec3> interpolate_displacements(const std::vector<Vec3>& nodes, const std::vector<Vec3>& displacement,
