@@ -50,12 +50,16 @@ InstabilityError::~InstabilityError() = default;
 
 std::vector<std::string> closest_names(const std::string& name, const std::vector<std::string>& candidates,
                                        std::size_t max_results) {
-  // A suggestion is worth making when at most a third of the letters (and at least 2) differ.
+  // A suggestion is worth making when at most a third of the letters (and at least 2) differ, or when one
+  // name is a shortened form of the other ("dynamic_relax" for "dynamic_relaxation").
   const std::size_t limit = std::max<std::size_t>(2, name.size() / 3);
+  auto abbreviates = [](const std::string& shorter, const std::string& longer) {
+    return shorter.size() >= 4 && shorter.size() < longer.size() && longer.compare(0, shorter.size(), shorter) == 0;
+  };
   std::vector<std::pair<std::size_t, std::string>> scored;
   for (const auto& candidate : candidates) {
     const std::size_t d = edit_distance(name, candidate);
-    if (d <= limit) scored.emplace_back(d, candidate);
+    if (d <= limit || abbreviates(name, candidate) || abbreviates(candidate, name)) scored.emplace_back(d, candidate);
   }
   std::stable_sort(scored.begin(), scored.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   std::vector<std::string> result;

@@ -50,7 +50,79 @@ void remove_unused_nodes(TetMesh& mesh) {
   mesh.points = std::move(points);
 }
 
-void check_mesh(TetMesh& mesh, bool fix_orientation) {
+namespace {
+
+// "tet 7 (number 8 in the mesh's order, centroid at (x, y, z) m)": internal node numbers mean nothing to the
+// person who wrote the mesh file, the position does.
+std::string describe_tet(const TetMesh& mesh, Index t) {
+  const auto& tet = mesh.tets[static_cast<std::size_t>(t)];
+  const Vec3 centroid = 0.25 * (mesh.points[tet[0]] + mesh.points[tet[1]] + mesh.points[tet[2]] + mesh.points[tet[3]]);
+  return fmt::format("tet {} (number {} in the mesh's order of tets, centroid at ({:.6g}, {:.6g}, {:.6g}) m)", t,
+                     t + 1, centroid[0], centroid[1], centroid[2]);
+}
+
+// With every tet right-handed, an interior face is seen with opposite orientations from its two tets. Two
+// tets on the same side of their shared face overlap: one of them was inverted (a node moved through the
+// opposite face) and merely re-ordering its nodes would hide a folded mesh. A face shared by more than two
+// tets is overlapping material as well.
+void check_no_overlaps(const TetMesh& mesh) {
+  struct FaceUse {
+    std::array<Index, 3> face;  // sorted vertices
+    Index tet;
+    bool even;  // orientation of the outward face relative to its sorted vertices
+  };
+  static constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::vector<FaceUse> uses;
+  uses.reserve(4 * mesh.tets.size());
+  for (Index t = 0; t < mesh.tet_count(); ++t) {
+    const auto& tet = mesh.tets[static_cast<std::size_t>(t)];
+    for (const auto& f : kFaces) {
+      std::array<Index, 3> v{tet[f[0]], tet[f[1]], tet[f[2]]};
+      bool even = true;  // parity of the sort: a 3-element bubble sort's swaps
+      for (const auto& [a, b] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{0, 1}}) {
+        if (v[a] > v[b]) {
+          std::swap(v[a], v[b]);
+          even = !even;
+        }
+      }
+      uses.push_back({v, t, even});
+    }
+  }
+  std::sort(uses.begin(), uses.end(),
+            [](const FaceUse& a, const FaceUse& b) { return a.face != b.face ? a.face < b.face : a.tet < b.tet; });
+  std::vector<Problem> problems;
+  std::size_t overlaps = 0;
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i + 1;
+    while (j < uses.size() && uses[j].face == uses[i].face) ++j;
+    const std::size_t count = j - i;
+    const bool fine = count == 1 || (count == 2 && uses[i].even != uses[i + 1].even);
+    if (!fine && ++overlaps <= 5) {
+      const auto& face = uses[i].face;
+      const Vec3 centre = (mesh.points[face[0]] + mesh.points[face[1]] + mesh.points[face[2]]) / 3.0;
+      if (count == 2) {
+        problems.push_back({mesh.source, fmt::format("{} and {} lie on the same side of their shared face (centre at "
+                                                     "({:.6g}, {:.6g}, {:.6g}) m): one of them is inverted (a node "
+                                                     "moved through the opposite face) or the two overlap; fix the "
+                                                     "node or re-mesh",
+                                                     describe_tet(mesh, uses[i].tet), describe_tet(mesh, uses[i + 1].tet),
+                                                     centre[0], centre[1], centre[2])});
+      } else {
+        problems.push_back({mesh.source, fmt::format("{} tets share the face centred at ({:.6g}, {:.6g}, {:.6g}) m (at "
+                                                     "most two can): the mesh has overlapping or repeated tets, "
+                                                     "starting with {}; re-mesh",
+                                                     count, centre[0], centre[1], centre[2], describe_tet(mesh, uses[i].tet))});
+      }
+    }
+    i = j;
+  }
+  if (overlaps > 5) problems.push_back({mesh.source, fmt::format("... {} such faces in all", overlaps)});
+  if (!problems.empty()) throw InputError(std::move(problems));
+}
+
+}  // namespace
+
+void check_mesh(TetMesh& mesh, bool fix_orientation, bool allow_overlaps) {
   std::vector<Problem> problems;
   const std::string& where = mesh.source;
   if (mesh.tets.empty()) throw InputError(where, "the mesh has no tetrahedra (mtled needs a volume mesh of 4-node tets)");
@@ -82,22 +154,21 @@ void check_mesh(TetMesh& mesh, bool fix_orientation) {
   for (Index t = 0; t < mesh.tet_count(); ++t) {
     const double v = tet_volume(mesh, t);
     if (!(std::abs(v) > zero_volume)) {
-      if (++degenerate <= 5) {
-        const auto& tet = mesh.tets[t];
-        problems.push_back({where, fmt::format("tet {} (nodes {}) has zero volume ({:.3g} m^3): remove it or re-mesh",
-                                               t, fmt::join(tet, " "), v)});
-      }
+      if (++degenerate <= 5)
+        problems.push_back({where, fmt::format("{} has zero volume ({:.3g} m^3; its nodes lie in one plane): remove "
+                                               "it or re-mesh", describe_tet(mesh, t), v)});
     } else if (v < 0.0) {
       ++inverted;
       if (fix_orientation) {
         std::swap(mesh.tets[t][2], mesh.tets[t][3]);
       } else if (inverted <= 5) {
-        problems.push_back({where, fmt::format("tet {} is inverted (negative volume {:.3g} m^3)", t, v)});
+        problems.push_back({where, fmt::format("{} is inverted (negative volume {:.3g} m^3)", describe_tet(mesh, t), v)});
       }
     }
   }
   if (degenerate > 5) problems.push_back({where, fmt::format("... {} zero-volume tets in all", degenerate)});
   if (!problems.empty()) throw InputError(std::move(problems));
+  if (!allow_overlaps) check_no_overlaps(mesh);
 }
 
 std::vector<std::array<Index, 3>> boundary_faces(const TetMesh& mesh) {

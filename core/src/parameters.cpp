@@ -391,6 +391,12 @@ bool check_value(const ParameterSpec& spec, const json& v, const std::string& wh
         problems.push_back({where, range_message(spec, format_number(v.get<double>()))});
         return false;
       }
+      // Read back as a long: 18446744073709551615 would wrap to -1 past an "at least 1" range.
+      if (std::abs(v.get<double>()) >= 1e15) {
+        problems.push_back({where, fmt::format("{} is too large for an integer parameter (at most 1e15 in "
+                                               "magnitude; {})", short_value(v), spec.doc)});
+        return false;
+      }
       return check_choice(spec, json(v.get<long>()), where, problems);
     case ParameterType::boolean:
       if (!v.is_boolean()) return wrong_type("true or false");

@@ -3,8 +3,8 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -117,20 +117,25 @@ std::string SceneDocument::locate(const std::string& pointer) const {
 SceneDocument parse_scene(const std::string& text, const std::string& name, const std::vector<std::string>& overrides) {
   SceneDocument document;
   document.name = name;
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw InputError(name, "the scene file is empty: a scene is a JSON object { \"mesh\": ..., ... } (see share/scenes)");
   try {
     document.root = json::parse(text);
   } catch (const json::parse_error& e) {
-    // nlohmann's message: "[json.exception.parse_error.101] parse error at line L, column C: <what>"
+    // nlohmann's message: "[json.exception.parse_error.101] parse error at line L, column C: <what>"; the line
+    // and column are recomputed from the byte offset (1-based, the offending character).
     std::string message = e.what();
-    std::smatch m;
-    static const std::regex located(R"(parse error at line (\d+), column (\d+): (.*))");
-    std::string where = name;
-    if (std::regex_search(message, m, located)) {
-      where = fmt::format("{}:{}:{}", name, m[1].str(), m[2].str());
-      message = m[3].str();
-    }
+    const auto colon = message.find(": ", message.find("parse error"));
+    if (colon != std::string::npos) message = message.substr(colon + 2);
+    const std::size_t offset = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
+    const std::size_t line_start = text.rfind('\n', offset == 0 ? 0 : offset - 1);
+    const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n');
+    const std::size_t column = offset - (line_start == std::string::npos || offset == 0 ? 0 : line_start + 1) + 1;
+    const std::string where = fmt::format("{}:{}:{}", name, line, column);
+    // The parser read past the last character: the text stopped before the JSON did.
+    const bool past_end = e.byte > text.size() || message.find("unexpected end of input") != std::string::npos;
     std::string hint = "check for a missing comma, quote or bracket";
-    if (message.find("end of input") != std::string::npos)
+    if (past_end)
       hint = "the file ends early: is it truncated, or is a closing '}' or ']' missing?";
     throw InputError(where, fmt::format("invalid JSON: {} ({})", message, hint));
   }
@@ -304,6 +309,16 @@ const std::vector<std::string>& top_level_keys() {
   return keys;
 }
 
+// A problem's `where` is a JSON pointer into the scene ("/materials/0/mu") or a file location
+// ("/data/mesh.msh:12", absolute paths also start with '/'): a pointer starts with a key of the scene.
+bool is_scene_pointer(const std::string& where, const SceneDocument& document) {
+  if (where.empty() || where[0] != '/') return false;
+  const std::string first = where.substr(1, where.find('/', 1) == std::string::npos ? std::string::npos
+                                                                                    : where.find('/', 1) - 1);
+  const auto& keys = top_level_keys();
+  return document.root.contains(first) || std::find(keys.begin(), keys.end(), first) != keys.end();
+}
+
 }  // namespace
 
 Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
@@ -360,7 +375,7 @@ Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
 
   if (!v.problems.empty()) {
     for (auto& p : v.problems)
-      if (!p.where.empty() && p.where[0] == '/') p.where = document.locate(p.where);
+      if (is_scene_pointer(p.where, document)) p.where = document.locate(p.where);
     throw InputError(std::move(v.problems));
   }
   scene.document = std::move(document);
@@ -370,7 +385,7 @@ Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
 InputError locate_problems(const InputError& error, const SceneDocument& document) {
   std::vector<Problem> problems = error.problems();
   for (auto& p : problems)
-    if (!p.where.empty() && p.where[0] == '/') p.where = document.locate(p.where);
+    if (is_scene_pointer(p.where, document)) p.where = document.locate(p.where);
   return InputError(std::move(problems));
 }
 

@@ -76,6 +76,38 @@ TEST(Mesh, CheckMeshFixesOrientationAndRefusesDegenerateTets) {
   EXPECT_THROW(check_mesh(out_of_range), InputError);
 }
 
+TEST(Mesh, CheckMeshRefusesFoldedAndRepeatedTets) {
+  // A 3x3x3 box; its middle node moved through a neighbouring node's opposite face folds the tets around it.
+  TetMesh mesh = test::box_mesh(Vec3(1, 1, 1), 3, 3, 3);
+  ASSERT_NO_THROW(check_mesh(mesh));
+  Index middle = -1;
+  for (Index i = 0; i < mesh.node_count(); ++i)
+    if ((mesh.points[i] - Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3)).norm() < 1e-12) middle = i;
+  ASSERT_GE(middle, 0);
+  TetMesh folded = mesh;
+  folded.source = "folded.inp";
+  folded.points[middle] = Vec3(0.9, 0.9, 0.9);  // past the nodes at 2/3
+  try {
+    check_mesh(folded);
+    FAIL() << "a folded mesh was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "folded.inp");
+    EXPECT_NE(std::string(e.what()).find("lie on the same side of their shared face"), std::string::npos) << e.what();
+  }
+  TetMesh allowed = folded;
+  EXPECT_NO_THROW(check_mesh(allowed, true, /*allow_overlaps=*/true));
+
+  TetMesh repeated = mesh;
+  repeated.tets.push_back(repeated.tets[5]);
+  repeated.tet_region.push_back(0);
+  EXPECT_THROW(check_mesh(repeated), InputError);
+
+  // Mixed vertex orders without a fold are a file convention, not an error.
+  TetMesh mixed = mesh;
+  for (std::size_t t = 0; t < mixed.tets.size(); t += 3) std::swap(mixed.tets[t][0], mixed.tets[t][1]);
+  EXPECT_NO_THROW(check_mesh(mixed));
+}
+
 TEST(Mesh, RemoveUnusedNodesKeepsOrderAndSets) {
   TetMesh mesh = test::box_mesh(Vec3(1, 1, 1), 1, 1, 1);
   mesh.points.insert(mesh.points.begin(), Vec3(9, 9, 9));  // an unused geometry point first

@@ -31,10 +31,13 @@ double tet_volume(const TetMesh& mesh, Index t);
 // node sets restricted to the surviving nodes.
 void remove_unused_nodes(TetMesh& mesh);
 
-// Checks the mesh: at least one tet, finite coordinates, indices in range, no zero-volume tets. Inverted
-// tets (negative volume) are reordered when `fix_orientation`, otherwise reported. Throws InputError
-// naming `mesh.source`.
-void check_mesh(TetMesh& mesh, bool fix_orientation = true);
+// Checks the mesh: at least one tet, finite coordinates, indices in range, no zero-volume tets. Tets listed
+// with a negative volume are reordered when `fix_orientation` (a file's vertex-order convention), otherwise
+// reported. Then no two tets may overlap: two tets on the same side of their shared face (one was inverted
+// by a node moved through the opposite face; reordering would hide the fold) or a face shared by more than
+// two tets are refused unless `allow_overlaps` (test clouds jittered at random, where only the nodes
+// matter). Throws InputError naming `mesh.source`.
+void check_mesh(TetMesh& mesh, bool fix_orientation = true, bool allow_overlaps = false);
 
 // The boundary faces (faces used by exactly one tet), ordered so that (b - a) x (c - a) points out of the body.
 std::vector<std::array<Index, 3>> boundary_faces(const TetMesh& mesh);
