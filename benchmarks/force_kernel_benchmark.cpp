@@ -1,0 +1,68 @@
+// The internal-force kernel (Model::internal_forces) on the default scene's cloud (the paper's coarse grid of
+// the small sample, about 7,500 nodes and 38,000 integration points), for 1 and 2 threads. Counters:
+// integration-point updates per second and the kernel's memory traffic per second, counted as the bytes the
+// kernel must stream once per call (support rows: node index and 3 gradients per entry; per integration
+// point: weight, offsets, material index; displacements read and forces written per support entry).
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <map>
+#include <memory>
+#include <random>
+
+#include "mtled/plugin_catalog.hpp"
+#include "mtled/scene.hpp"
+#include "mtled/simulation.hpp"
+
+namespace {
+
+using namespace mtled;
+
+struct Setup {
+  std::unique_ptr<PluginCatalog> catalog;
+  std::unique_ptr<Simulation> simulation;
+};
+
+// One simulation per thread count: the model sizes its per-thread force buffers when it is built.
+Simulation& simulation_for(int threads) {
+  static std::map<int, Setup> setups;
+  auto& s = setups[threads];
+  if (!s.simulation) {
+    omp_set_num_threads(threads);
+    SceneDocument document = read_scene(MTLED_SOURCE_DIR "/share/scenes/needle_small_sample.json");
+    s.catalog = std::make_unique<PluginCatalog>(plugin_search_path({}, scene_plugin_paths(document)));
+    const Scene scene = validate_scene(std::move(document), *s.catalog);
+    s.simulation = std::make_unique<Simulation>(scene, *s.catalog);
+  }
+  return *s.simulation;
+}
+
+void BM_InternalForces(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  Simulation& simulation = simulation_for(threads);
+  const Model& model = simulation.model();
+  const std::size_t dofs = 3 * static_cast<std::size_t>(model.node_count());
+  // A smooth field of about 1% strain: every integration point does real work.
+  std::vector<double> u(dofs), f(dofs);
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> noise(-1e-6, 1e-6);
+  for (Index i = 0; i < model.node_count(); ++i)
+    for (int k = 0; k < 3; ++k) u[3 * i + k] = 0.01 * model.nodes()[i][k] * (k == 2 ? -1.0 : 0.5) + noise(random);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(model.internal_forces(u, f));
+    benchmark::ClobberMemory();
+  }
+  const auto& rows = model.ip_supports();
+  const double entries = static_cast<double>(rows.nodes.size());
+  const double ips = static_cast<double>(model.integration_point_count());
+  const double bytes = entries * (sizeof(Index) + 3 * sizeof(double))  // support rows
+                       + entries * 3 * sizeof(double) * 2               // u read, f accumulated
+                       + ips * (2 * sizeof(double) + sizeof(std::int64_t));
+  state.counters["ip_updates_per_s"] = benchmark::Counter(ips, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["bytes_per_s"] = benchmark::Counter(bytes, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["support_mean"] = entries / ips;
+  state.counters["integration_points"] = ips;
+}
+BENCHMARK(BM_InternalForces)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
