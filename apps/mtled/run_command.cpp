@@ -155,6 +155,50 @@ class RunObserver final : public StepObserver {
   Progress progress_;
 };
 
+// The run's own error indicators, beside its timings (docs/studies.md): how far from equilibrium and from
+// rest the final state is, and the time step against the stable one.
+json error_indicators(Simulation& simulation, const json& integrator) {
+  json out = json::object();
+  // Global equilibrium: every constraint reaction and external force together should vanish at a steady
+  // state; measured against the largest reaction.
+  Vec3 total = Vec3::Zero();
+  double largest = 0.0;
+  for (const auto* set : simulation.constraint_sets()) {
+    total += set->total_reaction();
+    for (const auto& r : set->reactions) largest = std::max(largest, r.norm());
+  }
+  if (simulation.has_external_forces()) {
+    std::vector<double> f(simulation.displacement().size());
+    simulation.external_forces(f);
+    for (std::size_t i = 0; i < f.size(); ++i) total[static_cast<int>(i % 3)] += f[i];
+  }
+  out["net_force_N"] = vec_json(total);
+  out["net_force_over_largest_reaction"] = largest > 0.0 ? json(total.norm() / largest) : json(nullptr);
+  // Energies of the final state: kinetic over strain energy near 0 means the body is at rest.
+  const Model& model = simulation.model();
+  const double strain = model.strain_energy(simulation.displacement());
+  const double h = integrator.value("time_step_s", 0.0);
+  double kinetic = 0.0;
+  if (h > 0.0) {
+    const auto u = simulation.displacement();
+    const auto previous = simulation.previous_displacement();
+    const auto mass = simulation.mass();
+    for (std::size_t i = 0; i < u.size(); ++i) {
+      const double v = (u[i] - previous[i]) / h;
+      kinetic += 0.5 * mass[i / 3] * v * v;
+    }
+  }
+  out["strain_energy_J"] = strain;
+  out["kinetic_energy_J"] = kinetic;
+  out["kinetic_over_strain_energy"] = strain > 0.0 ? json(kinetic / strain) : json(nullptr);
+  // The time step used against the stable estimate for the masses in use (mass-scaled under dynamic
+  // relaxation); above 1 the monitors must catch a blow-up.
+  const double stable = simulation.stable_time_step();
+  out["time_step_over_stable"] = stable > 0.0 ? json(h / stable) : json(nullptr);
+  if (integrator.contains("relative_error_bound")) out["steady_state_relative_error_bound"] = integrator["relative_error_bound"];
+  return out;
+}
+
 }  // namespace
 
 int run_scene(const RunOptions& options) {
@@ -288,6 +332,7 @@ int run_scene(const RunOptions& options) {
   json reactions = json::object();
   for (const auto* set : simulation->constraint_sets()) reactions[set->name] = vec_json(set->total_reaction());
   summary["final_reactions_N"] = reactions;
+  summary["error_indicators"] = error_indicators(*simulation, summary["integrator"]);
   summary["status"] = "ok";
   write_summary();
   log().info("done: {} steps, solve {:.2f} s, {:.3g} integration-point updates/s; results in {}", simulation->step(),

@@ -38,6 +38,17 @@ TEST(Cli, RunsTheSmallCubeAndWritesTheContractOutputs) {
             json::array({"mtled-mesh-box.so", "mtled-shape_function-mls.so", "mtled-material-neo_hookean.so",
                          "mtled-boundary-fixed.so", "mtled-boundary-prescribed_displacement.so",
                          "mtled-integrator-dynamic_relaxation.so"}));
+  // The run's own error indicators. At the relaxed steady state the reactions balance: the net force is
+  // bounded by the residual the tolerance allows (relative 1e-5 on displacements, so well below 1e-3 of the
+  // largest nodal reaction); the body is at rest; the step is the scene's factor of the stable one.
+  const json& indicators = summary["error_indicators"];
+  EXPECT_LT(indicators["net_force_over_largest_reaction"].get<double>(), 1e-3) << indicators.dump();
+  EXPECT_LT(indicators["kinetic_over_strain_energy"].get<double>(), 1e-6) << indicators.dump();
+  EXPECT_GT(indicators["strain_energy_J"].get<double>(), 0.0);
+  EXPECT_NEAR(indicators["time_step_over_stable"].get<double>(), summary["integrator"]["time_step_factor"].get<double>(),
+              1e-9);
+  EXPECT_LT(indicators["steady_state_relative_error_bound"].get<double>(),
+            summary["integrator"]["tolerance"].get<double>());
   EXPECT_TRUE(fs::exists(out / "result.vtu"));
   EXPECT_TRUE(fs::exists(out / "reactions.csv"));
   EXPECT_FALSE(fs::exists(out / "needle.csv"));  // no needle, no needle output

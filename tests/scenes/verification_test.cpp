@@ -136,7 +136,8 @@ TEST_P(PatchTest, AffineBoundaryDisplacementIsReproducedInside) {
   RecordProperty("max_error_relative", fmt::format("{:.3e}", worst / largest));
   // The relaxation stops when its error estimate is below `tolerance` of the largest displacement; the
   // estimate is an extrapolation, so allow two orders of magnitude over it. Without consistent integration
-  // the error is 2-5% (docs/validation.md), so this bound does discriminate.
+  // the error on this 353-node cloud is 5.4% (MLS) and 15% (MMLS) (docs/validation.md), so the bound
+  // discriminates.
   EXPECT_LT(worst / largest, 100 * tolerance) << worst << " m worst error on " << field.points.size() << " nodes";
 }
 
