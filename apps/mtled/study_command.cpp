@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <fstream>
 #include <iostream>
 #include <set>
@@ -45,6 +46,7 @@ struct Configuration {
   json set = json::object();      // JSON pointer -> value: the study's common "set", then its own
   std::vector<std::string> overrides;  // the --set arguments
   json settings = json::object();      // value of every varied pointer in the scene as run ("default" if absent)
+  std::optional<double> reference_value;  // its own exact value, for value metrics (a material sweep)
 };
 
 enum class MetricKind { nrmse, force_error, summary_error };
@@ -84,6 +86,7 @@ struct Row {
   double setup_s = NAN, solve_s = NAN, wall_s = NAN, peak_mb = NAN;
   long steps = -1, nodes = -1, integration_points = -1;
   double value = NAN;            // force_error, summary_error: the quantity
+  double reference = NAN;        // ... and the value it is measured against
   Vec3 nrmse = Vec3::Constant(NAN);
   double error = NAN;
   bool pareto = false;
@@ -177,8 +180,16 @@ class StudyReader {
           continue;
         }
         for (const auto& [key, value] : item.items())
-          if (key != "label" && key != "set") problem(where + "/" + key, fmt::format("unknown key \"{}\"", key));
+          if (key != "label" && key != "set" && key != "reference_value")
+            problem(where + "/" + key, fmt::format("unknown key \"{}\" (a configuration has \"label\", \"set\" and "
+                                                   "optionally \"reference_value\")", key));
         Configuration c;
+        if (item.contains("reference_value")) {
+          if (!item["reference_value"].is_number())
+            problem(where + "/reference_value", "a number: this configuration's exact value of the metric's quantity");
+          else
+            c.reference_value = item["reference_value"].get<double>();
+        }
         c.label = item["label"].get<std::string>();
         c.where = where;
         c.set = common;
@@ -360,6 +371,9 @@ class StudyReader {
     }
     if (m.kind == MetricKind::nrmse && r.kind == Reference::Kind::value)
       problem("/reference", "the metric \"nrmse\" compares displacement fields: give a \"run\" or a \"set\" to run");
+    for (const auto& c : study.configurations)
+      if (c.reference_value && m.kind == MetricKind::nrmse)
+        problem(c.where + "/reference_value", "only for the metrics \"force_error\" and \"summary_error\"");
   }
 
   fs::path file_;
@@ -655,7 +669,8 @@ int study_command(const StudyOptions& options) {
           });
         } else {
           row.value = summary_quantity(row.summary, study.metric.pointer, (runner.folder(c) / "summary.json").string());
-          row.error = relative_error(row.value, reference_value);
+          row.reference = c.reference_value.value_or(reference_value);
+          row.error = relative_error(row.value, row.reference);
         }
       } catch (const std::exception& e) {
         row.status = "metric_failed";
@@ -682,7 +697,7 @@ int study_command(const StudyOptions& options) {
                         "wall_time_s", "peak_rss_mb"})
     header.emplace_back(h);
   if (nrmse) header.insert(header.end(), {"nrmse_x", "nrmse_y", "nrmse_z"});
-  else header.emplace_back("value");
+  else header.insert(header.end(), {"value", "reference_value"});
   header.insert(header.end(), {"error", "pareto"});
   auto count = [](long v) { return v >= 0 ? std::to_string(v) : std::string(); };
   out.write_file("study.csv", [&](std::ostream& o) {
@@ -696,7 +711,7 @@ int study_command(const StudyOptions& options) {
       if (nrmse)
         for (int k = 0; k < 3; ++k) f.push_back(number_text(r.nrmse[k], "{:.6e}"));
       else
-        f.push_back(number_text(r.value, "{:.9g}"));
+        f.insert(f.end(), {number_text(r.value, "{:.9g}"), number_text(r.reference, "{:.9g}")});
       f.insert(f.end(), {number_text(r.error, "{:.6e}"), r.pareto ? "true" : "false"});
       for (std::size_t i = 0; i < f.size(); ++i) o << (i ? "," : "") << csv_field(f[i]);
       o << "\n";
@@ -741,7 +756,10 @@ int study_command(const StudyOptions& options) {
                  {"error", number_json(r.error)},
                  {"pareto", r.pareto}};
     if (nrmse) item["nrmse"] = {{"ux", number_json(r.nrmse[0])}, {"uy", number_json(r.nrmse[1])}, {"uz", number_json(r.nrmse[2])}};
-    else item["value"] = number_json(r.value);
+    else {
+      item["value"] = number_json(r.value);
+      item["reference_value"] = number_json(r.reference);
+    }
     if (!r.message.empty()) item["message"] = r.message;
     configurations.push_back(std::move(item));
     if (r.pareto) by_time.push_back(&r);

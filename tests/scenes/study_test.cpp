@@ -178,6 +178,34 @@ TEST(Study, NrmseAgainstAReferenceRun) {
   EXPECT_TRUE(read_json(out / "study.json")["configurations"][0]["reused"].get<bool>());
 }
 
+// A configuration's own reference_value (a material sweep, each with its exact force) replaces the study's.
+// The small cube with mu doubled has exactly twice the force (the energy scales with mu at fixed mu D).
+TEST(Study, AConfigurationsOwnReferenceValueIsUsed) {
+  const fs::path folder = scratch_dir("study-own-reference");
+  const json study = {
+      {"scene", kSmallCube.string()},
+      {"threads", 1},
+      {"metric", {{"type", "force_error"}, {"set", "top"}, {"component", "z"}}},
+      {"reference", {{"value", kExactTopForce}}},
+      {"configurations",
+       {{{"label", "baseline"}, {"set", json::object()}},
+        {{"label", "mu_doubled"},
+         {"set", {{"/materials/0/mu", 2000}, {"/materials/0/D", 4.02684e-5 / 2}}},
+         {"reference_value", 2 * kExactTopForce}}}}};
+  write_text(folder / "study.json", study.dump(2));
+  const fs::path out = folder / "out";
+  const auto result = run_mtled({"study", (folder / "study.json").string(), "-o", out.string()});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  const auto rows = read_csv(out / "study.csv");
+  ASSERT_EQ(rows.size(), 3u);
+  const auto& header = rows[0];
+  EXPECT_DOUBLE_EQ(std::stod(rows[1][column(header, "reference_value")]), kExactTopForce);
+  EXPECT_DOUBLE_EQ(std::stod(rows[2][column(header, "reference_value")]), 2 * kExactTopForce);
+  // Both within the relaxation tolerance of their own exact force (against the study's value the doubled
+  // run would be 100% off).
+  for (std::size_t r = 1; r < 3; ++r) EXPECT_LT(std::stod(rows[r][column(header, "error")]), 1e-4) << r;
+}
+
 TEST(Study, ABadStudyFileExitsTwoAndRunsNothing) {
   const fs::path folder = scratch_dir("study-bad");
   json study = {{"scene", kSmallCube.string()},
