@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "mtled/log.hpp"
@@ -193,13 +194,81 @@ void Simulation::check_finite(std::span<const double> u_new, double new_time) co
 
 void Simulation::complete_step(std::span<double> u_new, double new_time, double new_load_fraction, double alpha) {
   check_finite(u_new, new_time);
+  const double step_size = new_time - load_.time;
+  // The prescribed values before the drivers move them: their change times the reactions is the work the
+  // constraints put in (energy monitor).
+  previous_values_.resize(constraint_sets_.size());
+  for (std::size_t s = 0; s < constraint_sets_.size(); ++s) previous_values_[s] = constraint_sets_[s]->values;
   load_.time = new_time;
   load_.load_fraction = new_load_fraction;
   load_.step += 1;
   update_drivers();
+  u_free_.assign(u_new.begin(), u_new.end());
   constraint_system_->enforce(u_new, alpha);
+  check_energy(u_new, step_size);
+  previous_step_size_ = step_size;
   u_previous_.swap(u_);
   std::copy(u_new.begin(), u_new.end(), u_.begin());
+}
+
+void Simulation::check_energy(std::span<const double> u_new, double step_size) {
+  for (std::size_t s = 0; s < constraint_sets_.size(); ++s) {
+    const NodalConstraints& set = *constraint_sets_[s];
+    const std::size_t n = std::min({previous_values_[s].size(), set.values.size(), set.reactions.size()});
+    for (std::size_t k = 0; k < n; ++k)
+      for (int c = 0; c < 3; ++c)
+        if (set.components[c]) work_bound_ += std::abs(set.reactions[k][c] * (set.values[k][c] - previous_values_[s][k][c]));
+  }
+  // The projection onto the constraints also changes the velocities it touches: the kinetic energy it adds is
+  // work the prescribed motion does on the nodes it drives directly. Only additions count: the energy it takes
+  // out of a growing mode (at fixed nodes) must not raise the bound that mode is measured against.
+  if (step_size > 0.0) {
+    double added = 0.0;
+    for (std::size_t d = 0; d < u_new.size(); ++d) {
+      const double after = u_new[d] - u_[d], before = u_free_[d] - u_[d];
+      added += mass_[d / 3] * std::max(0.0, after * after - before * before);
+    }
+    work_bound_ += 0.5 * added / (step_size * step_size);
+  }
+  // External force drivers would need their own work; none of the shipped plugins has one.
+  if (force_drivers_ > 0 || !(step_size > 0.0) || !(previous_step_size_ > 0.0)) return;
+  // The kinetic energy central differences conserve: 1/2 v(n-1/2) M v(n+1/2), the product of the two half-step
+  // velocities around step n. (The square of one half-step velocity overstates the energy of modes near the
+  // stability limit by 1 / (1 - (h omega / 2)^2), which would flag stable runs at large time-step factors.)
+  // For a mode that grows, it grows too (in magnitude).
+  const double scale = 0.5 / (step_size * previous_step_size_);
+  double kinetic = 0.0;
+  Index fastest = 0;
+  double fastest_energy = 0.0;
+  for (Index i = 0; i < model_->node_count(); ++i) {
+    double product = 0.0;
+    for (std::size_t d = 3 * static_cast<std::size_t>(i); d < 3 * static_cast<std::size_t>(i) + 3; ++d)
+      product += (u_[d] - u_previous_[d]) * (u_new[d] - u_[d]);
+    const double e = scale * mass_[i] * product;
+    kinetic += e;
+    if (std::abs(e) > fastest_energy) {
+      fastest_energy = std::abs(e);
+      fastest = i;
+    }
+  }
+  kinetic = std::abs(kinetic);
+  // Kinetic plus strain energy never exceed the work put in (damping only removes energy), and the work is
+  // bounded by the sum of |reaction x increment| accumulated above. A factor of 10 leaves room for the
+  // one-sided quadrature of that work and for mass scaling; a growing instability passes it within a few
+  // dozen steps.
+  constexpr double kMargin = 10.0;
+  if (!(kinetic > kMargin * work_bound_) || kinetic <= 0.0) return;
+  Diagnostic d;
+  d.step = load_.step;
+  d.time = load_.time;
+  d.what = "energy_growth";
+  d.detail = fmt::format("kinetic energy {:.4g} J exceeds {:g} times the work the loads have put in ({:.4g} J): the "
+                         "solution is growing without bound (the fastest node is {} at {} m); reduce the time-step "
+                         "factor",
+                         kinetic, kMargin, work_bound_, fastest, point_text(model_->nodes()[fastest]));
+  d.nodes = {fastest};
+  d.coordinates = {model_->nodes()[fastest]};
+  throw InstabilityError(std::move(d));
 }
 
 void Simulation::run(StepObserver* observer) {

@@ -161,6 +161,58 @@ TEST(Cli, APluginThatThrowsWhileBeingBuiltExitsTwo) {
   EXPECT_FALSE(fs::exists(out / "result.vtu"));
 }
 
+// A time step ten times the stable one grows without bound within a few steps. The run must stop with exit 3,
+// say where in summary.json and keep the last good state, and write nothing that looks like a result.
+void expect_detected_blow_up(const std::string& name, const json& integrator) {
+  const auto file = variant(name, [&](json& s) { s["integrator"] = integrator; });
+  const fs::path out = file.parent_path() / "out";
+  const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  const json summary = test::read_json(out / "summary.json");
+  EXPECT_EQ(summary["status"], "unstable");
+  const json& d = summary["diagnostic"];
+  // Whichever monitor sees it first: the energy growth, an inverted integration point, a non-finite value.
+  EXPECT_TRUE(d["what"] == "energy_growth" || d["what"] == "inverted_material" || d["what"] == "non_finite")
+      << d.dump();
+  EXPECT_GT(d["step"].get<long>(), 0);
+  EXPECT_LT(d["step"].get<long>(), 50) << "a factor of 10 should be caught within a few dozen steps";
+  EXPECT_FALSE(d["where"].empty());
+  EXPECT_TRUE(d["where"][0].contains("coordinates_m")) << d.dump();
+  EXPECT_FALSE(fs::exists(out / "result.vtu"));
+  EXPECT_TRUE(fs::exists(out / "last_good_state.vtu"));
+}
+
+TEST(Cli, TimeStepTenTimesTheStableOneIsDetected) {
+  expect_detected_blow_up("dr-factor-10", {{"type", "dynamic_relaxation"}, {"load_steps", 100}, {"tolerance", 1e-5},
+                                           {"time_step_factor", 10.0}});
+  expect_detected_blow_up("cd-factor-10", {{"type", "central_difference"}, {"duration", 0.3}, {"load_time", 0.2},
+                                           {"damping", 60.0},
+                                           {"time_step_factor", 10.0}});
+}
+
+// A slower blow-up (a factor of 4) under a load of 10 nm: each step multiplies the unstable mode's amplitude by
+// a few, so it takes a couple of dozen steps to invert a tet. The kinetic energy passes ten times the work the
+// prescribed motion has done long before: the energy monitor stops the run first.
+TEST(Cli, TheEnergyMonitorCatchesAGrowingModeBeforeItInvertsAnything) {
+  const auto file = variant("energy-growth", [](json& s) {
+    s["integrator"] = {{"type", "central_difference"}, {"duration", 0.3}, {"load_time", 0.2}, {"damping", 60.0},
+                       {"time_step_factor", 4.0}};
+    s["boundaries"][1]["displacement"] = {0.0, 0.0, -1e-8};
+  });
+  const fs::path out = file.parent_path() / "out";
+  const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});
+  ASSERT_EQ(result.exit_code, 3) << result.output;
+  const json summary = test::read_json(out / "summary.json");
+  EXPECT_EQ(summary["diagnostic"]["what"], "energy_growth") << summary["diagnostic"].dump();
+  expect_contains(summary["diagnostic"]["detail"].get<std::string>(), "reduce the time-step factor");
+  // The same scene at the default factor runs to the end.
+  const auto stable = variant("energy-stable", [](json& s) {
+    s["integrator"] = {{"type", "central_difference"}, {"duration", 0.3}, {"load_time", 0.2}, {"damping", 60.0}};
+    s["boundaries"][1]["displacement"] = {0.0, 0.0, -1e-8};
+  });
+  EXPECT_EQ(test::run_mtled({"run", stable.string(), "-o", (stable.parent_path() / "out").string()}).exit_code, 0);
+}
+
 TEST(Cli, OverridesAndUnknownCommands) {
   const fs::path out = test::scratch_dir("cli-set") / "out";
   auto result = test::run_mtled({"run", kSmallCube.string(), "-o", out.string(), "--set", "/materials/0/mu=-5"});

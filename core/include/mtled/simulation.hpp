@@ -63,6 +63,8 @@ class Simulation {
  private:
   void update_drivers();
   void check_finite(std::span<const double> u_new, double new_time) const;
+  // Stops the run (InstabilityError "energy_growth") when the kinetic energy exceeds what the loads put in.
+  void check_energy(std::span<const double> u_new, double step_size);
 
   std::unique_ptr<Model> model_;
   std::vector<std::shared_ptr<BoundaryCondition>> boundaries_;
@@ -80,6 +82,12 @@ class Simulation {
   double stable_time_step_ = 0.0;
   double unscaled_stable_time_step_ = 0.0;
   long force_evaluations_ = 0;
+  std::vector<std::vector<Vec3>> previous_values_;  // prescribed values of the previous step, per set
+  // Bound on the work the constraints have done (J): sum of |reaction . increment of the prescribed value| and of
+  // |kinetic energy the constraint projection added|.
+  double work_bound_ = 0.0;
+  double previous_step_size_ = 0.0;
+  std::vector<double> u_free_;  // this step's displacements before the constraint projection
 };
 
 }  // namespace mtled
