@@ -24,6 +24,38 @@ struct RowFailure {
   std::string message;
 };
 
+// The force kernel's two halves, file-local so that they inline into the loops (a member function of the
+// shared library would be called through the PLT).
+// F = I + sum_I u_I (x) grad N_I over the integration point's row (uncorrected gradients).
+inline Mat3 gather_F(const SupportRows& rows, Index ip, const double* u) {
+  const double* grads = rows.gradients.data();
+  const Index* nodes = rows.nodes.data();
+  Mat3 F = Mat3::Identity();
+  for (std::int64_t k = rows.offsets[ip]; k < rows.offsets[ip + 1]; ++k) {
+    const double* g = grads + 3 * k;
+    const double* ui = u + 3 * static_cast<std::size_t>(nodes[k]);
+    for (int a = 0; a < 3; ++a) {
+      F(a, 0) += ui[a] * g[0];
+      F(a, 1) += ui[a] * g[1];
+      F(a, 2) += ui[a] * g[2];
+    }
+  }
+  return F;
+}
+
+// forces_I += P (grad N_I + xi_I) for each node I of the row.
+inline void scatter_stress(const SupportRows& rows, const double* xi, Index ip, const Mat3& P, double* forces) {
+  const double* grads = rows.gradients.data();
+  const Index* nodes = rows.nodes.data();
+  for (std::int64_t k = rows.offsets[ip]; k < rows.offsets[ip + 1]; ++k) {
+    const auto node = static_cast<std::size_t>(nodes[k]);
+    const double* g = grads + 3 * k;
+    const double gx = g[0] + xi[3 * node], gy = g[1] + xi[3 * node + 1], gz = g[2] + xi[3 * node + 2];
+    double* fi = forces + 3 * node;
+    for (int a = 0; a < 3; ++a) fi[a] += P(a, 0) * gx + P(a, 1) * gy + P(a, 2) * gz;
+  }
+}
+
 }  // namespace
 
 Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
@@ -52,6 +84,7 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   build_time_steps();
   xi_.assign(3 * static_cast<std::size_t>(node_count()), 0.0);
   if (options.consistent_integration) build_integration_correction();
+  if (options.nodal_volumetric_averaging) build_volumetric_averaging();
   thread_forces_.resize(static_cast<std::size_t>(omp_get_max_threads()));
   for (auto& buffer : thread_forces_) buffer.assign(3 * static_cast<std::size_t>(node_count()), 0.0);
 }
@@ -253,20 +286,22 @@ std::vector<double> Model::lumped_mass(std::span<const double> density_scale) co
   return mass;
 }
 
-Mat3 Model::deformation_gradient(Index ip, std::span<const double> u) const {
-  Mat3 F = Mat3::Identity();
-  for (std::int64_t k = ip_rows_.offsets[ip]; k < ip_rows_.offsets[ip + 1]; ++k) {
-    const double* g = &ip_rows_.gradients[3 * k];
-    const double* ui = &u[3 * static_cast<std::size_t>(ip_rows_.nodes[k])];
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) F(a, b) += ui[a] * g[b];
+Mat3 Model::deformation_gradient(Index ip, std::span<const double> u) const { return gather_F(ip_rows_, ip, u.data()); }
+
+// Called inside a parallel region: sums the per-thread buffers in a fixed order, each thread its own slice.
+void Model::reduce_thread_forces(std::span<double> f) const {
+  const auto team = static_cast<std::size_t>(omp_get_num_threads());
+#pragma omp for schedule(static)
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    double sum = 0.0;
+    for (std::size_t t = 0; t < team; ++t) sum += thread_forces_[t][i];
+    f[i] = sum;
   }
-  return F;
 }
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
+  if (averaging_.enabled) return internal_forces_averaged(u, f);
   const Index n = integration_point_count();
-  const std::size_t dofs = 3 * static_cast<std::size_t>(node_count());
   Index first_bad = std::numeric_limits<Index>::max();
   // The team is the one the per-thread buffers were sized for, whatever a plugin did to OpenMP since.
 #pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
@@ -275,42 +310,134 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
     std::fill(local.begin(), local.end(), 0.0);
 #pragma omp for schedule(static)
     for (Index ip = 0; ip < n; ++ip) {
-      const std::int64_t begin = ip_rows_.offsets[ip], end = ip_rows_.offsets[ip + 1];
-      const Index* nodes = ip_rows_.nodes.data();
-      const double* grads = ip_rows_.gradients.data();
-      const double* xi = xi_.data();
-      Mat3 F = Mat3::Identity();
-      for (std::int64_t k = begin; k < end; ++k) {
-        const double* g = grads + 3 * k;
-        const double* ui = u.data() + 3 * static_cast<std::size_t>(nodes[k]);
-        for (int a = 0; a < 3; ++a) {
-          F(a, 0) += ui[a] * g[0];
-          F(a, 1) += ui[a] * g[1];
-          F(a, 2) += ui[a] * g[2];
-        }
-      }
+      const Mat3 F = gather_F(ip_rows_, ip, u.data());
       Mat3 S;
       if (!ip_material(ip).stress(F, S)) {
         first_bad = std::min(first_bad, ip);
         continue;
       }
-      const Mat3 P = ip_weight_[ip] * (F * S);  // first Piola-Kirchhoff stress times the weight
-      for (std::int64_t k = begin; k < end; ++k) {
-        const auto node = static_cast<std::size_t>(nodes[k]);
-        const double* g = grads + 3 * k;
-        const double gx = g[0] + xi[3 * node], gy = g[1] + xi[3 * node + 1], gz = g[2] + xi[3 * node + 2];
-        double* fi = local.data() + 3 * node;
-        for (int a = 0; a < 3; ++a) fi[a] += P(a, 0) * gx + P(a, 1) * gy + P(a, 2) * gz;
-      }
+      // first Piola-Kirchhoff stress times the weight
+      scatter_stress(ip_rows_, xi_.data(), ip, ip_weight_[ip] * (F * S), local.data());
     }
-    // Reduce the per-thread buffers in a fixed order, each thread summing its own slice of the forces.
-    const auto team = static_cast<std::size_t>(omp_get_num_threads());
+    reduce_thread_forces(f);
+  }
+  return first_bad == std::numeric_limits<Index>::max() ? -1 : first_bad;
+}
+
+void Model::build_volumetric_averaging() {
+  VolumetricAveraging& a = averaging_;
+  const auto nodes = static_cast<std::size_t>(node_count());
+  const auto points = static_cast<std::size_t>(integration_point_count());
+  a.node_points.offsets.assign(nodes + 1, 0);
+  for (Index ip = 0; ip < integration_point_count(); ++ip)
+    for (Index v : mesh_.tets[ip_tet_[ip]]) ++a.node_points.offsets[v + 1];
+  for (std::size_t i = 0; i < nodes; ++i) a.node_points.offsets[i + 1] += a.node_points.offsets[i];
+  a.node_points.nodes.resize(static_cast<std::size_t>(a.node_points.offsets.back()));
+  std::vector<std::int64_t> next(a.node_points.offsets.begin(), a.node_points.offsets.end() - 1);
+  a.node_weight.assign(nodes, 0.0);
+  // Filled in point order, so every node sums its points in the same order whatever the thread count.
+  for (Index ip = 0; ip < integration_point_count(); ++ip)
+    for (Index v : mesh_.tets[ip_tet_[ip]]) {
+      a.node_points.nodes[next[v]++] = ip;
+      a.node_weight[v] += ip_weight_[ip];
+    }
+  for (std::size_t i = 0; i < nodes; ++i)
+    if (!(a.node_weight[i] > 0.0)) a.node_weight[i] = 1.0;  // a vertex of no tet: never read
+  a.J.resize(points);
+  a.J_bar.resize(points);
+  a.pressure.resize(points);
+  a.local_stress.resize(points);
+  a.cofactor.resize(points);
+  a.node_value.resize(nodes);
+  a.enabled = true;
+}
+
+// J_I = sum_p w_p J_p / sum_p w_p over the points p of the tets around node I; J_bar at a point is the mean of
+// J_I over its tet's four vertices. Leaves F in local_stress and J F^-T in cofactor for the force pass.
+void Model::averaged_dilatation(std::span<const double> u, Index& first_bad_point) const {
+  const VolumetricAveraging& a = averaging_;
+  const Index n = integration_point_count();
+  Index first_bad = first_bad_point;
+#pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
+  {
 #pragma omp for schedule(static)
-    for (std::size_t i = 0; i < dofs; ++i) {
-      double sum = 0.0;
-      for (std::size_t t = 0; t < team; ++t) sum += thread_forces_[t][i];
-      f[i] = sum;
+    for (Index ip = 0; ip < n; ++ip) {
+      const Mat3 F = gather_F(ip_rows_, ip, u.data());
+      const double J = F.determinant();
+      a.local_stress[ip] = F;
+      a.J[ip] = J;
+      if (!(J > 0.0) || !std::isfinite(J) || !F.allFinite()) {
+        first_bad = std::min(first_bad, ip);
+        a.cofactor[ip].setZero();
+        continue;
+      }
+      a.cofactor[ip] = J * F.inverse().transpose();
     }
+#pragma omp for schedule(static)
+    for (Index node = 0; node < node_count(); ++node) {
+      double sum = 0.0;
+      for (std::int64_t k = a.node_points.offsets[node]; k < a.node_points.offsets[node + 1]; ++k) {
+        const Index ip = a.node_points.nodes[k];
+        sum += ip_weight_[ip] * a.J[ip];
+      }
+      a.node_value[node] = sum / a.node_weight[node];
+    }
+#pragma omp for schedule(static)
+    for (Index ip = 0; ip < n; ++ip) {
+      const auto& tet = mesh_.tets[ip_tet_[ip]];
+      a.J_bar[ip] = 0.25 * (a.node_value[tet[0]] + a.node_value[tet[1]] + a.node_value[tet[2]] + a.node_value[tet[3]]);
+    }
+  }
+  first_bad_point = first_bad;
+}
+
+// E = sum_q w_q W(F_bar_q), F_bar = r F with r = (J_bar / J)^(1/3), so det F_bar = J_bar. Its gradient has a local
+// part, P_bar : dF_bar/dF at fixed J_bar = r (P_bar - (P_bar : F) F^-T / 3), and a part through every J_bar:
+// dW/dJ_bar = (P_bar : F_bar) / (3 J_bar) =: pi_q / w_q, and dJ_bar_q / dF_p = sum over the vertices I shared
+// by q's and p's tets of (1/4) w_p / W_I times J_p F_p^-T. Summed over q: point p carries the extra stress
+// w_p (sum over its tet's vertices I of Pi_I) J_p F_p^-T with Pi_I = (1/4) sum_q pi_q / W_I.
+Index Model::internal_forces_averaged(std::span<const double> u, std::span<double> f) const {
+  const VolumetricAveraging& a = averaging_;
+  const Index n = integration_point_count();
+  Index first_bad = std::numeric_limits<Index>::max();
+  averaged_dilatation(u, first_bad);
+  if (first_bad != std::numeric_limits<Index>::max()) return first_bad;
+#pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
+  {
+#pragma omp for schedule(static)
+    for (Index ip = 0; ip < n; ++ip) {
+      const Mat3 F = a.local_stress[ip];
+      const double r = std::cbrt(a.J_bar[ip] / a.J[ip]);
+      const Mat3 F_bar = r * F;
+      Mat3 S;
+      if (!ip_material(ip).stress(F_bar, S)) {
+        first_bad = std::min(first_bad, ip);
+        a.pressure[ip] = 0.0;
+        continue;
+      }
+      const Mat3 P_bar = F_bar * S;
+      const Mat3 F_inverse_transpose = a.cofactor[ip] / a.J[ip];
+      a.local_stress[ip] = (ip_weight_[ip] * r) * (P_bar - (P_bar.cwiseProduct(F).sum() / 3.0) * F_inverse_transpose);
+      a.pressure[ip] = ip_weight_[ip] * P_bar.cwiseProduct(F_bar).sum() / (3.0 * a.J_bar[ip]);
+    }
+#pragma omp for schedule(static)
+    for (Index node = 0; node < node_count(); ++node) {
+      double sum = 0.0;
+      for (std::int64_t k = a.node_points.offsets[node]; k < a.node_points.offsets[node + 1]; ++k)
+        sum += a.pressure[a.node_points.nodes[k]];
+      a.node_value[node] = 0.25 * sum / a.node_weight[node];
+    }
+    std::vector<double>& local = thread_forces_[static_cast<std::size_t>(omp_get_thread_num())];
+    std::fill(local.begin(), local.end(), 0.0);
+#pragma omp for schedule(static)
+    for (Index ip = 0; ip < n; ++ip) {
+      const auto& tet = mesh_.tets[ip_tet_[ip]];
+      const double pressure =
+          a.node_value[tet[0]] + a.node_value[tet[1]] + a.node_value[tet[2]] + a.node_value[tet[3]];
+      scatter_stress(ip_rows_, xi_.data(), ip, a.local_stress[ip] + (ip_weight_[ip] * pressure) * a.cofactor[ip],
+                     local.data());
+    }
+    reduce_thread_forces(f);
   }
   return first_bad == std::numeric_limits<Index>::max() ? -1 : first_bad;
 }
@@ -318,6 +445,17 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
 double Model::strain_energy(std::span<const double> u) const {
   const Index n = integration_point_count();
   double energy = 0.0;
+  if (averaging_.enabled) {
+    Index first_bad = std::numeric_limits<Index>::max();
+    averaged_dilatation(u, first_bad);
+    if (first_bad != std::numeric_limits<Index>::max()) return std::numeric_limits<double>::quiet_NaN();
+#pragma omp parallel for schedule(static) reduction(+ : energy)
+    for (Index ip = 0; ip < n; ++ip) {
+      const double r = std::cbrt(averaging_.J_bar[ip] / averaging_.J[ip]);
+      energy += ip_weight_[ip] * ip_material(ip).energy(r * averaging_.local_stress[ip]);
+    }
+    return energy;
+  }
 #pragma omp parallel for schedule(static) reduction(+ : energy)
   for (Index ip = 0; ip < n; ++ip) energy += ip_weight_[ip] * ip_material(ip).energy(deformation_gradient(ip, u));
   return energy;

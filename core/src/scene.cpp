@@ -222,6 +222,12 @@ const ComponentDeclaration& discretisation_declaration() {
         .doc("correct the test-function gradients so that the discrete equations reproduce homogeneous "
              "deformations exactly (variationally consistent integration, Chen et al. 2013; passes the patch "
              "test); false gives the paper's plain MTLED quadrature");
+    d.string("volumetric")
+        .defaults("per_point")
+        .choices({"per_point", "nodal_average"})
+        .doc("how the volume change enters the stress: per_point uses each integration point's own J (the paper); "
+             "nodal_average uses J averaged over the tets around each node (an F-bar scheme) and removes the "
+             "volumetric locking of nearly incompressible materials under confinement (docs/validation.md)");
     return d;
   }();
   return declaration;

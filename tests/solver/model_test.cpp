@@ -16,7 +16,8 @@ constexpr double kMu = 1000.0;
 constexpr double kD = 4.02684e-5;  // nu = 0.49
 
 std::unique_ptr<Model> make_model(const std::string& shape_function = "mls", double jitter = 0.25, int n = 5,
-                                  const std::string& material = "neo_hookean", bool consistent = true) {
+                                  const std::string& material = "neo_hookean", bool consistent = true,
+                                  bool nodal_average = false) {
   TetMesh mesh = test::box_mesh(Vec3(0.01, 0.01, 0.01), n, n, n, jitter, 7);
   const auto sf = test::make<ShapeFunctions>(shape_function, json::object());
   json parameters = {{"mu", kMu}, {"D", kD}, {"density", 1000.0}};
@@ -24,6 +25,7 @@ std::unique_ptr<Model> make_model(const std::string& shape_function = "mls", dou
   const auto m = test::make<Material>(material, parameters);
   Model::Options options;
   options.consistent_integration = consistent;
+  options.nodal_volumetric_averaging = nodal_average;
   return std::make_unique<Model>(std::move(mesh), sf, std::vector<std::shared_ptr<const Material>>{m}, options);
 }
 
@@ -93,6 +95,50 @@ TEST(Model, InternalForcesAreTheGradientOfTheDiscreteEnergy) {
   }
 }
 
+TEST(Model, AveragedDilatationForcesAreTheGradientOfTheirEnergy) {
+  // With nodal volumetric averaging the energy is sum w W(F_bar), F_bar = (J_bar / J)^(1/3) F, and J_bar couples
+  // neighbouring points: the forces must still be its exact gradient (what makes relaxation and the energy
+  // monitor sound). Same finite-difference check as above; a strong random field so that J varies.
+  for (const std::string material : {"neo_hookean", "ogden"}) {
+    const auto model = make_model("mmls", 0.25, 4, material, /*consistent=*/false, /*nodal_average=*/true);
+    auto u = random_field(model->node_count(), 4e-4, 5);
+    std::vector<double> f(u.size());
+    ASSERT_EQ(model->internal_forces(u, f), -1);
+    const double h = 1e-8;
+    double worst = 0.0;
+    for (std::size_t i = 0; i < u.size(); i += 13) {
+      const double saved = u[i];
+      u[i] = saved + h;
+      const double plus = model->strain_energy(u);
+      u[i] = saved - h;
+      const double minus = model->strain_energy(u);
+      u[i] = saved;
+      worst = std::max(worst, std::abs((plus - minus) / (2 * h) - f[i]));
+    }
+    EXPECT_LT(worst, 1e-6 * max_abs(f)) << material;
+  }
+}
+
+TEST(Model, AveragedDilatationChangesNothingForAHomogeneousDeformation) {
+  // J is the same everywhere, so J_bar = J and F_bar = F: forces equal the per-point ones to round-off.
+  const auto plain = make_model("mmls", 0.25, 5, "ogden", true, false);
+  const auto averaged = make_model("mmls", 0.25, 5, "ogden", true, true);
+  Mat3 G;
+  G << -0.08, 0.02, 0.01, 0.03, 0.05, -0.02, 0.0, 0.04, -0.12;
+  std::vector<double> u(3 * static_cast<std::size_t>(plain->node_count()));
+  for (Index i = 0; i < plain->node_count(); ++i) {
+    const Vec3 d = G * plain->nodes()[i];
+    for (int c = 0; c < 3; ++c) u[3 * i + c] = d[c];
+  }
+  std::vector<double> one(u.size()), two(u.size());
+  ASSERT_EQ(plain->internal_forces(u, one), -1);
+  ASSERT_EQ(averaged->internal_forces(u, two), -1);
+  double difference = 0.0;
+  for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(one[i] - two[i]));
+  EXPECT_LT(difference, 1e-10 * max_abs(one));
+  EXPECT_NEAR(averaged->strain_energy(u), plain->strain_energy(u), 1e-12 * plain->strain_energy(u));
+}
+
 TEST(Model, ConsistentIntegrationBalancesAHomogeneousStressWithNodalBoundaryTerms) {
   // With the correction, sum_ip w (grad N_I + xi_I) = sum_K N_I(X_K) A_K (A_K: a third of the outward area of
   // the boundary faces at node K). So for an affine field (uniform P), f_I = sum_K N_I(X_K) P A_K: nodal
@@ -133,20 +179,26 @@ TEST(Model, ConsistentIntegrationBalancesAHomogeneousStressWithNodalBoundaryTerm
 }
 
 TEST(Model, ForcesDoNotDependOnTheThreadCount) {
-  const auto model = make_model("mls", 0.3, 6);
-  const auto u = random_field(model->node_count(), 3e-4, 11);
-  std::vector<double> one(u.size()), two(u.size());
-  const int saved = omp_get_max_threads();
-  omp_set_num_threads(1);
-  model->internal_forces(u, one);
-  omp_set_num_threads(2);
-  model->internal_forces(u, two);
-  omp_set_num_threads(saved);
-  // Summation order differs only across the two per-thread buffers: a few ulps of the largest force.
-  double difference = 0.0;
-  for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(one[i] - two[i]));
-  EXPECT_LE(difference, 1e-13 * max_abs(one));
-  EXPECT_GT(max_abs(one), 0.0);
+  // A model sizes its per-thread buffers (and so its team) for the thread count when it is built, and ctest
+  // runs with OMP_NUM_THREADS=1: build one model per thread count.
+  for (const bool nodal_average : {false, true}) {
+    const int saved = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const auto serial = make_model("mls", 0.3, 6, "neo_hookean", true, nodal_average);
+    omp_set_num_threads(2);
+    const auto parallel = make_model("mls", 0.3, 6, "neo_hookean", true, nodal_average);
+    omp_set_num_threads(saved);
+    const auto u = random_field(serial->node_count(), 3e-4, 11);
+    std::vector<double> one(u.size()), two(u.size());
+    serial->internal_forces(u, one);
+    parallel->internal_forces(u, two);
+    // Summation order differs only across the two per-thread buffers: a few ulps of the largest force.
+    double difference = 0.0;
+    for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(one[i] - two[i]));
+    EXPECT_LE(difference, 1e-13 * max_abs(one)) << "nodal_average " << nodal_average;
+    EXPECT_GT(difference, 0.0) << "expected different summation orders: did the second model run on 2 threads?";
+    EXPECT_GT(max_abs(one), 0.0);
+  }
 }
 
 TEST(Model, InvertedMaterialIsReportedNotHidden) {

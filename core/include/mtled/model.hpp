@@ -42,6 +42,11 @@ class Model {
     // test) despite the inexact quadrature of rational shape functions; F still uses the uncorrected
     // gradients, so rigid motions stay stress-free.
     bool consistent_integration = true;
+    // Nodally averaged dilatation (an F-bar scheme): each integration point uses F_bar = (J_bar / J)^(1/3) F,
+    // with J_bar the average over its tet's four vertices of the volume-weighted mean J of the tets around each.
+    // Relieves the volumetric locking of nearly incompressible materials (about five integration points per
+    // node each imposing J = 1); the forces stay the exact gradient of sum_ip w W(F_bar).
+    bool nodal_volumetric_averaging = false;
   };
 
   // `region_materials[r]` fills mesh region r.
@@ -82,9 +87,11 @@ class Model {
 
   // Internal nodal forces f_I = sum_ip w F S (grad N_I + xi_I) for nodal parameters u (3 per node). Returns -1, or
   // the lowest-numbered integration point whose F is inadmissible (J <= 0 or not finite); f is then
-  // incomplete. Parallel over integration points (OpenMP); not re-entrant.
+  // incomplete. Parallel over integration points (OpenMP); not re-entrant. With nodal volumetric averaging,
+  // f = dE/du of E = sum_ip w W(F_bar) (see Options).
   Index internal_forces(std::span<const double> u, std::span<double> f) const;
   double strain_energy(std::span<const double> u) const;
+  bool nodal_volumetric_averaging() const { return averaging_.enabled; }
   Mat3 deformation_gradient(Index ip, std::span<const double> u) const;
   // Interpolated displacement at every node: u(X_J) = sum_I N_I(X_J) u_I.
   void interpolate(std::span<const double> u, std::span<double> out) const;
@@ -99,6 +106,12 @@ class Model {
   void build_supports();
   void build_time_steps();
   void build_integration_correction();
+  void build_volumetric_averaging();
+  // With averaging: J at every integration point (false at the first inadmissible one, stored in first_bad),
+  // then J_bar at every integration point.
+  void averaged_dilatation(std::span<const double> u, Index& first_bad) const;
+  Index internal_forces_averaged(std::span<const double> u, std::span<double> f) const;
+  void reduce_thread_forces(std::span<double> f) const;
   // Support rows (values, or values and gradients) at arbitrary points; throws InputError naming `what`.
   void build_rows(const std::vector<Vec3>& points, bool gradients, const char* what, SupportRows& rows,
                   SupportStatistics* stats) const;
@@ -124,6 +137,15 @@ class Model {
   std::vector<double> xi_;
 
   mutable std::vector<std::vector<double>> thread_forces_;
+
+  // Nodal volumetric averaging: allocated only when the scene asks for it.
+  struct VolumetricAveraging {
+    bool enabled = false;
+    SupportRows node_points;            // node -> integration points whose tet has it as a vertex (no values)
+    std::vector<double> node_weight;    // sum of those points' weights
+    mutable std::vector<double> J, J_bar, node_value, pressure;  // scratch, per point / node / point
+    mutable std::vector<Mat3> local_stress, cofactor;            // scratch, per point
+  } averaging_;
 };
 
 }  // namespace mtled
