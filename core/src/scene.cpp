@@ -4,7 +4,9 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <charconv>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -97,6 +99,55 @@ class LineScanner {
 
 std::string json_type(const json& v) { return v.is_number_integer() ? "integer" : v.type_name(); }
 
+// A scene nests a few levels. LineScanner, and nlohmann's dump() in messages, recurse once per level: a
+// text nested many thousands deep (which json::parse itself accepts) would overflow the stack.
+constexpr int kMaxNesting = 100;
+
+// The offset of the first '[' or '{' of syntactically valid JSON `text` nested deeper than kMaxNesting.
+std::optional<std::size_t> too_deep(const std::string& text) {
+  int depth = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxNesting) return i;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return std::nullopt;
+}
+
+// "name:line:column" of the character at `offset` (1-based line and column).
+std::string text_location(const std::string& name, const std::string& text, std::size_t offset) {
+  const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n');
+  const std::size_t line_start = text.rfind('\n', offset);
+  const std::size_t column = offset - (line_start == std::string::npos ? 0 : line_start + 1) + 1;
+  return fmt::format("{}:{}:{}", name, line, column);
+}
+
+// json::parse throws out_of_range (not parse_error) for a number beyond a double's range, such as 1e400; its
+// message quotes the number. Found by tests/fuzz: it escaped as "error: [json.exception.out_of_range.406]".
+std::string number_overflow_message(const json::out_of_range& e, std::string& literal) {
+  const std::string message = e.what();
+  const auto open = message.find('\''), close = message.rfind('\'');
+  if (open != std::string::npos && close > open) literal = message.substr(open + 1, close - open - 1);
+  return fmt::format("the number {} is too large: numbers must lie within +-1.8e308 (a mistyped exponent?)",
+                     literal.empty() ? std::string("here") : literal);
+}
+
+std::string too_deep_message() {
+  return fmt::format("lists and objects nested more than {} deep: a scene needs a few levels; is this a scene file?",
+                     kMaxNesting);
+}
+
 }  // namespace
 
 fs::path SceneDocument::directory() const { return file.empty() ? fs::current_path() : file.parent_path(); }
@@ -138,8 +189,14 @@ SceneDocument parse_scene(const std::string& text, const std::string& name, cons
     if (past_end)
       hint = "the file ends early: is it truncated, or is a closing '}' or ']' missing?";
     throw InputError(where, fmt::format("invalid JSON: {} ({})", message, hint));
+  } catch (const json::out_of_range& e) {
+    std::string literal;
+    const std::string message = number_overflow_message(e, literal);
+    const std::size_t at = literal.empty() ? std::string::npos : text.find(literal);
+    throw InputError(at == std::string::npos ? name : text_location(name, text, at), message);
   }
   if (!document.root.is_object()) throw InputError(name, "a scene must be a JSON object { ... }");
+  if (const auto offset = too_deep(text)) throw InputError(text_location(name, text, *offset), too_deep_message());
   LineScanner(text, document.lines).scan();
   for (const auto& o : overrides) apply_override(document, o);
   return document;
@@ -165,8 +222,12 @@ void apply_override(SceneDocument& document, const std::string& assignment) {
   json value;
   try {
     value = json::parse(text);
+    if (too_deep(text)) throw InputError("--set " + pointer, too_deep_message());
   } catch (const json::parse_error&) {
     value = text;  // bare words are strings: --set /shape_function/type=mls
+  } catch (const json::out_of_range& e) {
+    std::string literal;
+    throw InputError("--set " + pointer, number_overflow_message(e, literal));
   }
   try {
     // Missing objects on the way are created (optional sections such as /discretisation); a misspelt key
@@ -177,11 +238,14 @@ void apply_override(SceneDocument& document, const std::string& assignment) {
     const json* node = &document.root;
     for (const auto& token : tokens) {
       if (node->is_array()) {
-        const bool index = !token.empty() && token.find_first_not_of("0123456789") == std::string::npos;
-        if (!index || std::stoul(token) >= node->size())
+        // from_chars, not stoul: an index too large for std::size_t is out of range like any other.
+        std::size_t at = 0;
+        const bool index = !token.empty() && token.find_first_not_of("0123456789") == std::string::npos &&
+                           std::from_chars(token.data(), token.data() + token.size(), at).ec == std::errc();
+        if (!index || at >= node->size())
           throw InputError("--set " + pointer, fmt::format("\"{}\" is not an index of a list of {} entries", token,
                                                            node->size()));
-        node = &(*node)[std::stoul(token)];
+        node = &(*node)[at];
       } else if (node->is_object() && node->contains(token)) {
         node = &(*node)[token];
       } else {

@@ -79,6 +79,53 @@ TEST(Scene, OverridesApplyBeforeValidationAndAreLocatedAsSuch) {
   EXPECT_EQ(parse_scene(kScene, "scene.json", {"/output/every_steps=5"}).root["output"]["every_steps"], 5);
 }
 
+// An index too large for std::size_t escaped as std::out_of_range ("error: stoul", exit 1) instead of an
+// InputError.
+TEST(Scene, HugeOverrideIndexIsAnInputError) {
+  try {
+    parse_scene(kScene, "scene.json", {"/materials/99999999999999999999/mu=1"});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "--set /materials/99999999999999999999/mu");
+    EXPECT_NE(problems_text(e).find("is not an index of a list of 1 entries"), std::string::npos) << e.what();
+  }
+}
+
+// Found by tests/fuzz: a number beyond a double's range made json::parse throw out_of_range, which escaped as
+// "error: [json.exception.out_of_range.406] ..." (exit 1) instead of a located InputError.
+TEST(Scene, NumberBeyondADoubleIsALocatedInputError) {
+  try {
+    parse_scene("{\n  \"integrator\": {\"tolerance\": 1e400}\n}", "big.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "big.json:2:31");
+    EXPECT_NE(problems_text(e).find("the number 1e400 is too large"), std::string::npos) << e.what();
+  }
+  try {
+    parse_scene(kScene, "scene.json", {"/integrator/tolerance=-1e999"});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "--set /integrator/tolerance");
+  }
+}
+
+// Lists nested 100,000 deep parse as JSON, but recording their lines recursed once per level and overflowed
+// the stack (a segmentation fault); nesting is now refused with the place where it gets too deep.
+TEST(Scene, DeepNestingIsAnInputError) {
+  const int levels = 100000;
+  const std::string deep = std::string(levels, '[') + std::string(levels, ']');
+  try {
+    parse_scene("{\n  \"description\": " + deep + "}", "deep.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "deep.json:2:117");
+    EXPECT_NE(problems_text(e).find("nested more than 100 deep"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(parse_scene(kScene, "scene.json", {"/description=" + deep}), InputError);
+  // Strings may hold any brackets.
+  EXPECT_NO_THROW(parse_scene("{\"description\": \"" + std::string(1000, '[') + "\\\"{\"}", "s.json"));
+}
+
 TEST(Scene, CategoryMismatchIsAnUnknownType) {
   PluginCatalog catalog({test::plugin_dir()});
   try {

@@ -132,8 +132,9 @@ class InpParser {
   }
   [[noreturn]] void fail_here(const std::string& message) { fail(here(), message); }
 
-  // The next line that is not blank and not a "**" comment, from the innermost open file.
-  std::optional<std::string_view> next_raw_line() {
+  // The next line that is not blank and not a "**" comment, from the innermost open file. With `same_file`,
+  // nothing at the end of that file rather than the next line of the file that included it.
+  std::optional<std::string_view> next_raw_line(bool same_file = false) {
     while (!open_.empty()) {
       TextCursor& innermost = *sources_[static_cast<std::size_t>(open_.back())].cursor;
       while (const auto line = innermost.next_line()) {
@@ -142,6 +143,7 @@ class InpParser {
         current_ = open_.back();
         return text;
       }
+      if (same_file) return std::nullopt;
       open_.pop_back();
     }
     return std::nullopt;
@@ -175,9 +177,11 @@ class InpParser {
     Keyword keyword;
     keyword.place = here();
     std::string text(first.substr(1));
-    // A keyword line ending with a comma continues on the next line.
+    // A keyword line ending with a comma continues on the next line of its file. (Going on in the including
+    // file closed this one, so "*INCLUDE, INPUT=self.inp," at its end included itself forever: found by
+    // tests/fuzz.)
     while (!mesh_readers::trim(text).empty() && mesh_readers::trim(text).back() == ',') {
-      const auto more = next_raw_line();
+      const auto more = next_raw_line(true);
       if (!more) break;
       text += *more;
     }
@@ -369,11 +373,18 @@ class InpParser {
         const auto first = mesh_readers::to_integer(fields_[0], cursor(), "the first id");
         const auto last = mesh_readers::to_integer(fields_[1], cursor(), "the last id");
         const auto step = fields_.size() == 3 ? mesh_readers::to_integer(fields_[2], cursor(), "the increment") : 1;
-        if (step <= 0 || last < first || (last - first) / step >= kMaxGenerated)
+        // In unsigned arithmetic (which wraps, where signed overflow is undefined): ids near the ends of the
+        // integer range overflowed `last - first` and `id += step` (a range from the least to the largest
+        // integer passed the size check and allocated until std::bad_alloc). Every id is within [first, last].
+        const auto start = static_cast<unsigned long long>(first), increment = static_cast<unsigned long long>(step);
+        const unsigned long long steps =
+            step <= 0 || last < first ? 0 : (static_cast<unsigned long long>(last) - start) / increment;
+        if (step <= 0 || last < first || steps >= static_cast<unsigned long long>(kMaxGenerated))
           fail(place, fmt::format("GENERATE {}, {}, {} is not a range (first <= last, increment > 0, fewer than {} "
                                   "ids)",
                                   first, last, step, kMaxGenerated));
-        for (long long id = first; id <= last; id += step) set.members.push_back({id, place});
+        for (unsigned long long i = 0; i <= steps; ++i)
+          set.members.push_back({static_cast<long long>(start + i * increment), place});
         continue;
       }
       for (const auto field : fields_) {
@@ -388,8 +399,14 @@ class InpParser {
         if (it == sets.end())
           fail(place, fmt::format("{} is neither an id nor a {} set defined above", quote_token(field),
                                   nodes ? "node" : "element"));
-        const std::vector<Member> members = it->second.members;  // copy: `set` may be the same set
-        set.members.insert(set.members.end(), members.begin(), members.end());
+        // A set named in itself adds nothing, but copying it doubled the set with each mention: "a, a, a, ..."
+        // exhausted the memory. Sets that name each other can still grow so: they are stopped at a size no
+        // mesh needs.
+        if (&it->second == &set) continue;
+        if (set.members.size() + it->second.members.size() > static_cast<std::size_t>(kMaxGenerated))
+          fail(place, fmt::format("set \"{}\" grows past {} members: do sets name each other again and again?", name,
+                                  kMaxGenerated));
+        set.members.insert(set.members.end(), it->second.members.begin(), it->second.members.end());
       }
     }
   }

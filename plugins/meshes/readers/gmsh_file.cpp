@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -254,7 +255,9 @@ class MshParser {
     for (int d = 0; d < 4; ++d) {
       counts[d] = mesh_readers::to_integer(fields_[d], cursor_, "an entity count");
       if (counts[d] < 0) cursor_.fail("entity counts cannot be negative");
-      progress.total += counts[d];
+      // Saturated: four counts near the largest integer would overflow the sum (the section then ends early).
+      if (__builtin_add_overflow(progress.total, counts[d], &progress.total))
+        progress.total = std::numeric_limits<long long>::max();
     }
     for (int dimension = 0; dimension < 4; ++dimension) {
       for (long long i = 0; i < counts[dimension]; ++i, ++progress.done) {
@@ -318,7 +321,8 @@ class MshParser {
                         fields_.size()));
       const auto parametric = mesh_readers::to_integer(fields_[2], cursor_, "the parametric flag (0 or 1)");
       const auto in_block = mesh_readers::to_integer(fields_[3], cursor_, "the number of nodes in the block");
-      if (in_block < 0 || progress.done + in_block > progress.total)
+      // Compared with what is left, not summed: a huge block count would overflow done + in_block.
+      if (in_block < 0 || in_block > progress.total - progress.done)
         cursor_.fail(
             fmt::format("the node blocks hold more nodes than the $Nodes header announces ({})", progress.total));
       const long first_tag_line = cursor_.line() + 1;
@@ -368,10 +372,11 @@ class MshParser {
             fmt::format("element {} has type {}, which mtled does not know: mtled reads 4-node tets "
                         "(type 4) beside points, lines and triangles",
                         id, type));
+      // The count in the message is a double: 3 + a damaged tag count near the largest integer would overflow.
       if (tag_count < 0 ||
           fields_.size() != 3 + static_cast<std::size_t>(tag_count) + static_cast<std::size_t>(info->nodes))
         cursor_.fail(fmt::format("element {} ({} with {} tags) should have {} fields, found {}", id, info->name,
-                                 tag_count, 3 + tag_count + info->nodes, fields_.size()));
+                                 tag_count, 3 + static_cast<double>(tag_count) + info->nodes, fields_.size()));
       // The first tag is the physical group (0: none), the second the elementary entity.
       const long long physical = tag_count >= 1 ? mesh_readers::to_integer(fields_[3], cursor_, "a physical tag") : 0;
       const std::size_t first_node = 3 + static_cast<std::size_t>(tag_count);
@@ -413,7 +418,7 @@ class MshParser {
       const auto in_block = mesh_readers::to_integer(fields_[3], cursor_, "the number of elements in the block");
       if (dimension < 0 || dimension > 3)
         cursor_.fail(fmt::format("entity dimension {} is not 0, 1, 2 or 3", dimension));
-      if (in_block < 0 || progress.done + in_block > progress.total)
+      if (in_block < 0 || in_block > progress.total - progress.done)  // not summed: see read_nodes_v4
         cursor_.fail(fmt::format("the element blocks hold more elements than the $Elements header announces ({})",
                                  progress.total));
       const auto info = gmsh_element_type(type);

@@ -2,6 +2,9 @@
 // VTK User's Guide; version 5.x writes cells as OFFSETS and CONNECTIVITY arrays).
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <limits>
+
 #include "mtled/errors.hpp"
 #include "support/text_cursor.hpp"
 #include "vtk_grid.hpp"
@@ -95,7 +98,8 @@ class LegacyParser {
       cursor_.fail(fmt::format("a legacy .vtk file starts with \"{} x.y\", found {}: is this a VTK file?", magic,
                                mesh_readers::quote_token(first ? *first : "")));
     const auto version = mesh_readers::parse_real(mesh_readers::trim(first->substr(magic.size())));
-    major_version_ = version ? static_cast<int>(*version) : 0;
+    // Clamped: a damaged version such as 5e59 does not fit in an int (undefined behaviour; found by tests/fuzz).
+    major_version_ = version ? static_cast<int>(std::clamp(*version, 0.0, 1000.0)) : 0;
     if (!cursor_.next_line()) cursor_.fail("the file ends after its first line: it is truncated");
     const auto format = cursor_.next_line();
     if (!format) cursor_.fail("the file ends before its ASCII/BINARY line: it is truncated");
@@ -124,6 +128,13 @@ class LegacyParser {
     mesh_readers::split_whitespace(rest ? *rest : std::string_view(), fields_);
     if (fields_.size() < count) cursor_.fail(fmt::format("{} needs \"{} {}\" on its line", keyword, keyword, form));
     return fields_;
+  }
+
+  // a * b for counts read from the file, which a damaged header may make as large as it likes: saturated
+  // instead of overflowing (no file holds that many values, so reading them then fails at the file's end).
+  static long long product(long long a, long long b) {
+    long long result = 0;
+    return __builtin_mul_overflow(a, b, &result) ? std::numeric_limits<long long>::max() : result;
   }
 
   long long count(std::string_view token, std::string_view what) {
@@ -176,12 +187,12 @@ class LegacyParser {
       for (long long c = 0; c < first; ++c) {
         const auto k = count(cell_token(c, first), "the number of points of a cell");
         cell_line_.push_back(cursor_.line());
-        read += 1 + k;
-        if (read > second)
+        if (k >= second - read)  // read + 1 + k > second, without overflowing for a huge k
           cursor_.fail(
               fmt::format("the cells list more than the {} integers announced on line {}: the file is "
                           "damaged; save it again",
                           second, cells_line));
+        read += 1 + k;
         for (long long j = 0; j < k; ++j)
           connectivity_.push_back(mesh_readers::to_integer(cell_token(c, first), cursor_, "a point index"));
         ends_.push_back(static_cast<long long>(connectivity_.size()));
@@ -252,7 +263,7 @@ class LegacyParser {
     const bool cells = location_ == Location::cells;
     const bool wanted = location_ != Location::none && (cells ? request_.wants_cell(name) : request_.wants_point(name));
     DataArray array{std::move(name), components, {}, cursor_.where(header_line)};
-    const long long n = tuples * components;
+    const long long n = product(tuples, components);
     const std::string what = fmt::format("the values of array \"{}\" ({} expected)", array.name, n);
     if (wanted) array.values.reserve(cursor_.reservable(n, 2));  // a digit and a space at least
     for (long long i = 0; i < n; ++i) {
@@ -310,24 +321,24 @@ class LegacyParser {
   void skip_attribute(const std::string& keyword, int components) {
     require_attributes(keyword);
     header(keyword, 2, "dataName dataType");
-    skip_values(tuples_ * components);
+    skip_values(product(tuples_, components));
   }
 
   void skip_texture_coordinates() {
     require_attributes("TEXTURE_COORDINATES");
     header("TEXTURE_COORDINATES", 3, "dataName dim dataType");
-    skip_values(tuples_ * count(fields_[1], "the dimension"));
+    skip_values(product(tuples_, count(fields_[1], "the dimension")));
   }
 
   void skip_color_scalars() {
     require_attributes("COLOR_SCALARS");
     header("COLOR_SCALARS", 2, "dataName nValues");
-    skip_values(tuples_ * count(fields_[1], "the number of values"));
+    skip_values(product(tuples_, count(fields_[1], "the number of values")));
   }
 
   void skip_lookup_table() {
     header("LOOKUP_TABLE", 2, "tableName size");
-    skip_values(4 * count(fields_[1], "the table size"));
+    skip_values(product(4, count(fields_[1], "the table size")));
   }
 
   // METADATA blocks (VTK 9 writers) end at an empty line.

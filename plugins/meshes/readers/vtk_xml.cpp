@@ -499,12 +499,10 @@ class VtuParser {
       throw InputError(array_where(array), fmt::format("the binary data of DataArray \"{}\" ends before its header: "
                                                        "the file is truncated or damaged; save it again",
                                                        array.name));
+    // The byte count as an integer, not through convert(): as a double, a count near 2^64 rounds up to 2^64,
+    // which std::uint64_t cannot hold (undefined behaviour; found by tests/fuzz with UBSan).
     std::uint64_t size = 0;
-    if (header_size_ == 4) {
-      size = static_cast<std::uint64_t>(convert(bytes.data(), ScalarType{ScalarKind::unsigned_integer, 4}));
-    } else {
-      size = static_cast<std::uint64_t>(convert(bytes.data(), ScalarType{ScalarKind::unsigned_integer, 8}));
-    }
+    for (std::size_t i = 0; i < header_size_; ++i) size = (size << 8) | bytes[big_endian_ ? i : header_size_ - 1 - i];
     bytes.clear();
     if (size > (std::uint64_t{1} << 36) || !read(static_cast<std::size_t>(size)))
       throw InputError(array_where(array), fmt::format("DataArray \"{}\" announces {} bytes but the file holds fewer: "
@@ -609,11 +607,14 @@ class VtuParser {
         throw InputError(array_where(piece.points),
                          fmt::format("the points have {} components, expected 3", piece.points.components));
       const std::vector<double> xyz = decode(piece.points);
-      if (xyz.size() != 3 * n_points)
+      // Divided, not multiplied: 3 * NumberOfPoints wraps around for a damaged count near 2^64 / 3 and could
+      // then match a short array, whose end the loop below would read past.
+      if (xyz.size() % 3 != 0 || xyz.size() / 3 != n_points)
         throw InputError(array_where(piece.points), fmt::format("the points DataArray holds {} values, expected {} "
                                                                 "(3 for each of {} points): the file is truncated or "
                                                                 "damaged; save it again",
-                                                                xyz.size(), 3 * n_points, n_points));
+                                                                xyz.size(), 3.0 * static_cast<double>(n_points),
+                                                                n_points));
       for (std::size_t i = 0; i < n_points; ++i) grid.points.emplace_back(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
     }
     if (n_cells > 0) {
@@ -639,7 +640,8 @@ class VtuParser {
       }
       if (!(cells ? request_.wants_cell(spec.name) : request_.wants_point(spec.name))) continue;
       const std::vector<double> values = decode(spec);
-      if (values.size() != tuples * static_cast<std::size_t>(spec.components))
+      if (values.size() % static_cast<std::size_t>(spec.components) != 0 ||
+          values.size() / static_cast<std::size_t>(spec.components) != tuples)  // divided: see add_piece
         throw InputError(array_where(spec),
                          fmt::format("DataArray \"{}\" holds {} values, expected {} ({} {} x {} "
                                      "components): the file is truncated or damaged; save it again",

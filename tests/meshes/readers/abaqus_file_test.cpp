@@ -122,6 +122,20 @@ TEST(AbaqusFile, IncludeSetsFromElementsAndUnassignedTets) {
   EXPECT_EQ(where_of(error), (dir / "nodes.inp").string() + ":3");
 }
 
+// A set named in itself was copied into itself, doubling with each mention: 40 mentions wanted 2^40 members.
+// GENERATE ids near the ends of the integer range overflowed the arithmetic.
+TEST(AbaqusFile, SetNamedInItselfAndExtremeGenerateRanges) {
+  std::string again;
+  for (int i = 0; i < 40; ++i) again += "a, ";
+  const auto dir = write_file("self_set", "m.inp",
+                              "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n"
+                              "*NSET, NSET=a\n1\n" +
+                                  again + "a\n*NSET, NSET=b, GENERATE\n2, 9223372036854775807, 9223372036854775807\n");
+  const TetMesh mesh = read_mesh("abaqus_file", {{"path", "m.inp"}}, dir);
+  EXPECT_EQ(mesh.node_sets.at("a"), (std::vector<Index>{0}));
+  EXPECT_EQ(mesh.node_sets.at("b"), (std::vector<Index>{1}));
+}
+
 TEST(AbaqusFile, WithoutElementSetsTheRegionIsAll) {
   const auto dir =
       write_file("no_sets", "m.inp", "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n");
@@ -203,7 +217,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadInp{"section_without_set", kNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*SOLID SECTION, ELSET=tissue\n", 9,
                "names element set \"tissue\", which the file does not define"},
         BadInp{"system", "*SYSTEM\n0, 0, 0\n", 1, "*SYSTEM"},
-        BadInp{"missing_include", "*INCLUDE, INPUT=absent.inp\n", 1, "does not exist"}),
+        BadInp{"missing_include", "*INCLUDE, INPUT=absent.inp\n", 1, "does not exist"},
+        // last - first overflowed for a range over the whole integer range, which passed the size check and
+        // allocated until std::bad_alloc.
+        BadInp{"generate_whole_integer_range",
+               kNodes + "*NSET, NSET=a, GENERATE\n-9223372036854775808, 9223372036854775807, 1\n", 8, "is not a range"},
+        // Found by tests/fuzz: the keyword line's continuation went on past the end of the file, closing it, so
+        // the file included itself forever instead of ever getting 16 deep.
+        BadInp{"include_itself_continued", "*INCLUDE, INPUT=bad.inp,\n", 1, "*INCLUDE nested more than 16 deep"}),
     [](const auto& test_case) { return test_case.param.name; });
 
 }  // namespace

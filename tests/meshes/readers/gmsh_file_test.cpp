@@ -161,7 +161,19 @@ INSTANTIATE_TEST_SUITE_P(
                22, "belongs to 2 physical groups"},
         BadMsh{"v41_truncated_block",
                "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 4 1 4\n3 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n", 12,
-               "the file ends inside the $Nodes section that starts on line 4 after 2 of 4 nodes"}),
+               "the file ends inside the $Nodes section that starts on line 4 after 2 of 4 nodes"},
+        // Counts near the largest integer overflowed the reader's arithmetic (undefined behaviour, which UBSan
+        // reports): they must be refused like any other wrong count.
+        BadMsh{"huge_tag_count", kHeader + kNodes + "$Elements\n1\n1 4 9223372036854775807 10 20 30 40\n$EndElements\n",
+               14, "with 9223372036854775807 tags"},
+        BadMsh{"huge_node_block",
+               "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n2 2 1 2\n0 1 0 1\n1\n0 0 0\n0 2 0 9223372036854775807\n"
+               "$EndNodes\n",
+               9, "the node blocks hold more nodes than the $Nodes header announces (2)"},
+        BadMsh{"huge_entity_counts",
+               "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n9223372036854775807 9223372036854775807 0 0\n"
+               "$EndEntities\n",
+               6, "the $Entities section that starts on line 4 ends after 0 of"}),
     [](const auto& test_case) { return test_case.param.name; });
 
 TEST(GmshFileErrorsWithoutLine, NoTetsEmptyAndMissingFiles) {

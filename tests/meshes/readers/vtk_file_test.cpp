@@ -184,7 +184,27 @@ INSTANTIATE_TEST_SUITE_P(
         BadVtk{"vtu_truncated", "m.vtu", vtu("0 1 2 3", "10").substr(0, 330), 9, "never closed"},
         BadVtk{"vtu_base64_short", "m.vtu", vtu("EAAAAAAAAAA=", "10", "", "binary"), 9,
                "announces 16 bytes but the file holds fewer"},
-        BadVtk{"polydata_xml", "m.vtu", "<VTKFile type=\"PolyData\">\n</VTKFile>\n", 1, "holds a PolyData"}),
+        // Found by tests/fuzz: a UInt64 byte count near 2^64 was converted through a double that overflowed.
+        BadVtk{"vtu_header_near_2_64", "m.vtu", vtu("//////////8=", "10", " header_type=\"UInt64\"", "binary"), 9,
+               "announces 18446744073709551615 bytes but the file holds fewer"},
+        BadVtk{"polydata_xml", "m.vtu", "<VTKFile type=\"PolyData\">\n</VTKFile>\n", 1, "holds a PolyData"},
+        // Counts near the largest integer overflowed the reader's arithmetic: 3 times this NumberOfPoints
+        // wraps around to 2, matched the two values given, and the points were read past the array's end.
+        BadVtk{"vtu_point_count_wraps", "m.vtu",
+               "<VTKFile type=\"UnstructuredGrid\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\"6148914691236517206\" "
+               "NumberOfCells=\"0\">\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
+               "format=\"ascii\">1 2</DataArray>\n</Points>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n",
+               5, "holds 2 values"},
+        // Found by tests/fuzz: a version too large for an int was converted to one.
+        BadVtk{"huge_version", "m.vtk", "# vtk DataFile Version 5e59\ntest\nBINARY\n", 3, "save the mesh as ASCII"},
+        // A file ending in a newline ends on the (empty) line after its last one: 6 here, 7 below.
+        BadVtk{"huge_lookup_table", "m.vtk", kLegacyHead + "LOOKUP_TABLE t 9223372036854775807\n", 6,
+               "the file ends while reading the values of a data array"},
+        BadVtk{"huge_field_tuples", "m.vtk", kLegacyHead + "FIELD f 1\na 2 9223372036854775807 float\n", 7,
+               "the file ends while reading the values of array \"a\""},
+        BadVtk{"huge_cell_size", "m.vtk",
+               kLegacyHead + "POINTS 1 float\n0 0 0\nCELLS 2 9223372036854775807\n0\n9223372036854775807\n", 9,
+               "the cells list more than the 9223372036854775807 integers"}),
     [](const auto& test_case) { return test_case.param.name; });
 
 TEST(VtkFileErrorsAtThePath, UnknownExtension) {
