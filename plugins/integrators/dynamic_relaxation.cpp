@@ -98,10 +98,15 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
       d.step = simulation.step();
       d.time = simulation.time();
       d.what = "not_converged";
-      d.detail = fmt::format(
-          "dynamic relaxation did not reach the steady state in {} steps: estimated error {:.3g} m against a "
-          "tolerance of {:.3g} m; raise /integrator/max_steps or /integrator/tolerance",
-          max_steps_, error_bound_, tolerance_ * largest_displacement_);
+      // Stopped while still loading, there is no error estimate yet: say how far the load got instead.
+      d.detail = n + 1 < load_steps_
+                     ? fmt::format("dynamic relaxation stopped at /integrator/max_steps = {} while still applying the "
+                                   "load (step {} of /integrator/load_steps = {}); raise max_steps above load_steps",
+                                   max_steps_, n + 1, load_steps_)
+                     : fmt::format("dynamic relaxation did not reach the steady state in {} steps: estimated error "
+                                   "{:.3g} m against a tolerance of {:.3g} m; raise /integrator/max_steps or "
+                                   "/integrator/tolerance",
+                                   max_steps_, error_bound_, tolerance_ * largest_displacement_);
       throw InstabilityError(std::move(d));
     }
   }

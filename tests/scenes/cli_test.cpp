@@ -213,6 +213,27 @@ TEST(Cli, TheEnergyMonitorCatchesAGrowingModeBeforeItInvertsAnything) {
   EXPECT_EQ(test::run_mtled({"run", stable.string(), "-o", (stable.parent_path() / "out").string()}).exit_code, 0);
 }
 
+// Dynamic relaxation that runs out of steps is not a result: exit 3, "not_converged", and a detail that says
+// which limit to raise (while the load is still being applied there is no error estimate to quote).
+TEST(Cli, RelaxationThatRunsOutOfStepsIsReportedNotWritten) {
+  const auto check = [](const std::string& name, const json& integrator, const std::string& detail) {
+    const auto file = variant(name, [&](json& s) { s["integrator"] = integrator; });
+    const fs::path out = file.parent_path() / "out";
+    const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});
+    ASSERT_EQ(result.exit_code, 3) << result.output;
+    const json summary = test::read_json(out / "summary.json");
+    EXPECT_EQ(summary["status"], "unstable");
+    EXPECT_EQ(summary["diagnostic"]["what"], "not_converged") << summary["diagnostic"].dump();
+    expect_contains(summary["diagnostic"]["detail"].get<std::string>(), detail);
+    EXPECT_FALSE(fs::exists(out / "result.vtu"));
+  };
+  check("dr-still-loading", {{"type", "dynamic_relaxation"}, {"load_steps", 100}, {"max_steps", 40}},
+        "while still applying the load (step 40 of /integrator/load_steps = 100)");
+  check("dr-not-converged",
+        {{"type", "dynamic_relaxation"}, {"load_steps", 100}, {"max_steps", 120}, {"tolerance", 1e-12}},
+        "did not reach the steady state in 120 steps");
+}
+
 TEST(Cli, OverridesAndUnknownCommands) {
   const fs::path out = test::scratch_dir("cli-set") / "out";
   auto result = test::run_mtled({"run", kSmallCube.string(), "-o", out.string(), "--set", "/materials/0/mu=-5"});
