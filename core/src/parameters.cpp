@@ -27,7 +27,7 @@ std::string json_type_name(const json& v) {
 }
 
 std::string short_value(const json& v) {
-  std::string text = v.dump();
+  std::string text = v.dump(-1, ' ', false, json::error_handler_t::replace);  // never throws on bad UTF-8
   if (text.size() > 40) text = text.substr(0, 37) + "...";
   return text;
 }

@@ -219,6 +219,15 @@ void apply_override(SceneDocument& document, const std::string& assignment) {
                      "expected /json/pointer=value, for example --set /needle/depth=0.005");
   const std::string pointer = assignment.substr(0, eq);
   const std::string text = assignment.substr(eq + 1);
+  // Scene files are checked for UTF-8 by the parser; an override's bare words are not, and a string that is
+  // not UTF-8 made every later dump() (messages, summary.json) throw. Found by tests/fuzz.
+  try {
+    (void)json(assignment).dump();
+  } catch (const json::type_error&) {
+    const std::string shown = json(pointer).dump(-1, ' ', false, json::error_handler_t::replace);
+    throw InputError("--set " + shown.substr(1, shown.size() - 2),
+                     "the override is not valid UTF-8 text: check the shell's encoding");
+  }
   json value;
   try {
     value = json::parse(text);

@@ -126,6 +126,19 @@ TEST(Scene, DeepNestingIsAnInputError) {
   EXPECT_NO_THROW(parse_scene("{\"description\": \"" + std::string(1000, '[') + "\\\"{\"}", "s.json"));
 }
 
+// Found by tests/fuzz: an override's bare words are not checked by the JSON parser, and a string that was not
+// UTF-8 made the validation messages' dump() throw (std::terminate in the fuzz target).
+TEST(Scene, OverrideThatIsNotUtf8IsAnInputError) {
+  try {
+    parse_scene(kScene, "scene.json", {"/description=caf\xdf!"});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "--set /description");
+    EXPECT_NE(problems_text(e).find("not valid UTF-8"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(parse_scene(kScene, "scene.json", {"/description=caf\xc3\xa9"}));  // UTF-8 is fine
+}
+
 TEST(Scene, CategoryMismatchIsAnUnknownType) {
   PluginCatalog catalog({test::plugin_dir()});
   try {
