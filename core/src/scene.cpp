@@ -245,6 +245,7 @@ void apply_override(SceneDocument& document, const std::string& assignment) {
     std::vector<std::string> tokens;
     for (json::json_pointer p = target; !p.empty(); p = p.parent_pointer()) tokens.insert(tokens.begin(), p.back());
     const json* node = &document.root;
+    std::size_t depth = 0;  // tokens that exist
     for (const auto& token : tokens) {
       if (node->is_array()) {
         // from_chars, not stoul: an index too large for std::size_t is out of range like any other.
@@ -260,7 +261,16 @@ void apply_override(SceneDocument& document, const std::string& assignment) {
       } else {
         break;
       }
+      ++depth;
     }
+    // Below the first missing key, nlohmann would make a list for a numeric token and grow it to the index
+    // (an index of 10^19 threw std::length_error, found by tests/fuzz; 10^9 would take all the memory).
+    for (std::size_t k = depth + 1; k < tokens.size(); ++k)
+      if (!tokens[k].empty() && (tokens[k] == "-" || tokens[k].find_first_not_of("0123456789") == std::string::npos))
+        throw InputError("--set " + pointer,
+                         fmt::format("\"{}\" does not exist, so \"{}\" below it cannot be a list index: --set creates "
+                                     "missing objects, not lists; set the whole list instead",
+                                     tokens[depth], tokens[k]));
     document.root[target] = value;
   } catch (const json::exception& e) {
     throw InputError("--set " + pointer, fmt::format("cannot set this pointer: {}", e.what()));

@@ -139,6 +139,22 @@ TEST(Scene, OverrideThatIsNotUtf8IsAnInputError) {
   EXPECT_NO_THROW(parse_scene(kScene, "scene.json", {"/description=caf\xc3\xa9"}));  // UTF-8 is fine
 }
 
+// Found by tests/fuzz: below a missing key a numeric token made nlohmann create a list as long as the index
+// (std::length_error for 10^19, all the memory for 10^9). Missing objects are still created.
+TEST(Scene, OverrideDoesNotCreateListsBelowAMissingKey) {
+  try {
+    parse_scene("{}", "empty.json", {"/materials/1000000000/mu=5"});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.problems()[0].where, "--set /materials/1000000000/mu");
+    EXPECT_NE(problems_text(e).find("\"materials\" does not exist, so \"1000000000\" below it cannot be a list index"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(parse_scene("{}", "empty.json", {"/discretisation/volumetric=nodal_average"}).root["discretisation"]["volumetric"],
+            "nodal_average");
+}
+
 TEST(Scene, CategoryMismatchIsAnUnknownType) {
   PluginCatalog catalog({test::plugin_dir()});
   try {
