@@ -120,6 +120,7 @@ int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as
     std::cout << "## Scene sections of the kernel\n\n";
     describe_markdown(std::cout, discretisation_declaration(), "###");
     describe_markdown(std::cout, output_declaration(), "###");
+    describe_markdown(std::cout, monitors_declaration(), "###");
     for (Category category : plugin_categories()) {
       std::cout << "## " << to_string(category) << "\n\n";
       for (const auto& item : listed)

@@ -339,6 +339,30 @@ const ComponentDeclaration& output_declaration() {
   return declaration;
 }
 
+const ComponentDeclaration& monitors_declaration() {
+  static const ComponentDeclaration declaration = [] {
+    ComponentDeclaration d("monitors", Category::scene);
+    d.summary(
+        "Stability checks beyond the ones that are always on (non-finite values, J <= 0, energy growth): the "
+        "time step against the stable step of the current, deformed body (docs/stability.md).");
+    d.integer("stable_step_every_steps")
+        .defaults(2000)
+        .non_negative()
+        .unit("1")
+        .doc("re-estimate the stable time step 2 / sqrt(lambda_max(M^-1 K)) at step 1 and then every this many "
+             "steps, by Lanczos iteration on finite differences of the internal forces, and stop (status "
+             "\"unstable\", what \"time_step_above_stable\") when the time step exceeds it by more than 5%; 0 turns the check off");
+    d.integer("stable_step_iterations")
+        .defaults(20)
+        .between(2, 200)
+        .unit("1")
+        .doc("Lanczos vectors per re-estimate (each one internal-force evaluation and one vector of memory); each "
+             "estimate starts from the previous one's Ritz vector; the first, from a random one, uses three times as many");
+    return d;
+  }();
+  return declaration;
+}
+
 namespace {
 
 struct Validator {
@@ -394,7 +418,7 @@ struct Validator {
 const std::vector<std::string>& top_level_keys() {
   static const std::vector<std::string> keys = {"$schema",   "description", "plugin_paths",   "mesh",
                                                 "shape_function", "materials", "boundaries", "needle",
-                                                "integrator", "discretisation", "output"};
+                                                "integrator", "discretisation", "output",   "monitors"};
   return keys;
 }
 
@@ -454,6 +478,8 @@ Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
   scene.discretisation = validate_parameters(discretisation_declaration(), root.value("discretisation", empty),
                                              "/discretisation", v.problems, {});
   scene.output = validate_parameters(output_declaration(), root.value("output", empty), "/output", v.problems, {});
+  scene.monitors =
+      validate_parameters(monitors_declaration(), root.value("monitors", empty), "/monitors", v.problems, {});
 
   // At most one material may omit "region" (it fills every region the others leave).
   int without_region = 0;
@@ -502,11 +528,12 @@ json scene_json_schema(PluginCatalog& catalog) {
       {"needle", one_of(Category::needle)},
       {"integrator", one_of(Category::integrator)},
       {"discretisation", discretisation_declaration().to_json_schema()},
-      {"output", output_declaration().to_json_schema()}};
-  properties["discretisation"]["properties"].erase("type");
-  properties["output"]["properties"].erase("type");
-  properties["discretisation"]["required"] = json::array();
-  properties["output"]["required"] = json::array();
+      {"output", output_declaration().to_json_schema()},
+      {"monitors", monitors_declaration().to_json_schema()}};
+  for (const char* section : {"discretisation", "output", "monitors"}) {
+    properties[section]["properties"].erase("type");
+    properties[section]["required"] = json::array();
+  }
   return {{"$schema", "https://json-schema.org/draft/2020-12/schema"},
           {"$id", "https://mtled.org/schema/scene.json"},
           {"title", "mtled scene"},

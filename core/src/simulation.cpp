@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <Eigen/Eigenvalues>
 #include <cmath>
 
 #include "mtled/log.hpp"
@@ -38,6 +39,19 @@ void guarded(const Parameters& parameters, const std::string& what, Call call) {
 }
 
 std::string point_text(const Vec3& x) { return fmt::format("({:.6g}, {:.6g}, {:.6g})", x[0], x[1], x[2]); }
+
+// An instability located at one node of `model`.
+InstabilityError node_instability(long step, double time, std::string what, std::string detail, const Model& model,
+                                  Index node) {
+  Diagnostic d;
+  d.step = step;
+  d.time = time;
+  d.what = std::move(what);
+  d.detail = std::move(detail);
+  d.nodes = {node};
+  d.coordinates = {model.nodes()[node]};
+  return InstabilityError(std::move(d));
+}
 
 }  // namespace
 
@@ -130,6 +144,18 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   constraint_system_->enforce(u_, 1.0);
 
   integrator_ = build<TimeIntegrator>(catalog, scene.integrator);
+
+  stable_step_every_ = scene.monitors.integer("stable_step_every_steps");
+  stable_step_iterations_ = static_cast<int>(scene.monitors.integer("stable_step_iterations"));
+  if (stable_step_every_ > 0) {
+    // 1e-7 of the body's size: far inside the linear range of any element, far above round-off in the forces.
+    Vec3 low = model_->nodes()[0], high = low;
+    for (const Vec3& x : model_->nodes()) {
+      low = low.cwiseMin(x);
+      high = high.cwiseMax(x);
+    }
+    perturbation_length_ = 1e-7 * (high - low).norm();
+  }
 }
 
 Simulation::~Simulation() = default;
@@ -181,15 +207,10 @@ void Simulation::check_finite(std::span<const double> u_new, double new_time) co
   for (std::size_t i = 0; i < u_new.size(); ++i) {
     if (std::isfinite(u_new[i])) continue;
     const auto node = static_cast<Index>(i / 3);
-    Diagnostic d;
-    d.step = load_.step + 1;
-    d.time = new_time;
-    d.what = "non_finite";
-    d.detail = fmt::format("displacement component {} of node {} at {} m became {}", "xyz"[i % 3], node,
-                           point_text(model_->nodes()[node]), u_new[i]);
-    d.nodes = {node};
-    d.coordinates = {model_->nodes()[node]};
-    throw InstabilityError(std::move(d));
+    throw node_instability(load_.step + 1, new_time, "non_finite",
+                           fmt::format("displacement component {} of node {} at {} m became {}", "xyz"[i % 3], node,
+                                       point_text(model_->nodes()[node]), u_new[i]),
+                           *model_, node);
   }
 }
 
@@ -210,6 +231,115 @@ void Simulation::complete_step(std::span<double> u_new, double new_time, double 
   previous_step_size_ = step_size;
   u_previous_.swap(u_);
   std::copy(u_new.begin(), u_new.end(), u_.begin());
+  if (stable_step_every_ > 0 && (load_.step == 1 || load_.step % stable_step_every_ == 0)) check_stable_step(step_size);
+}
+
+void Simulation::check_stable_step(double step_size) {
+  // The largest eigenvalue of K v = lambda M v at the current state by Lanczos iteration on
+  // A = M^-1/2 K M^-1/2 (full reorthogonalisation; a few dozen vectors), with A q from a forward difference of
+  // the internal forces. Were K symmetric, the Ritz values would approach lambda_max from below and the estimate
+  // could only overstate the stable step; variationally consistent integration makes K slightly unsymmetric,
+  // and the estimate then lands within a few percent of 2 / sqrt(spectral radius) on either side
+  // (tests/solver/stable_step_test.cpp). A run is stopped only when its step exceeds the estimate by 5%, so a
+  // run that would finish is not stopped; beyond that margin the central-difference update (and dynamic
+  // relaxation's, whose limit is the same as its damping vanishes) is unstable. Constraints are ignored, which
+  // can only raise lambda_max. The next check starts from this one's Ritz vector; the first, from a random
+  // vector, uses three times as many.
+  const std::size_t dofs = u_.size();
+  if (mode_.empty()) {
+    // A fixed pseudo-random start (reproducible runs) with a component along every mode.
+    mode_.resize(dofs);
+    std::uint64_t state = 0x9E3779B97F4A7C15ULL;
+    for (double& x : mode_) {
+      state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+      x = static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5;
+    }
+  }
+  std::vector<double> f0(dofs), f1(dofs), perturbed(dofs), root_mass(dofs);
+  for (std::size_t d = 0; d < dofs; ++d) root_mass[d] = std::sqrt(mass_[d / 3]);
+  if (model_->internal_forces(u_, f0) >= 0) return;  // an inadmissible state is the other monitors' business
+  ++monitor_force_evaluations_;
+
+  // A random start needs more vectors than a warm one to resolve the top of the spectrum.
+  const int size = stable_step_checks_ == 0 ? 3 * stable_step_iterations_ : stable_step_iterations_;
+  Eigen::MatrixXd q(static_cast<Eigen::Index>(dofs), size);
+  Eigen::VectorXd alpha(size), beta(size);
+  Eigen::VectorXd w(static_cast<Eigen::Index>(dofs));
+  for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * mode_[d];
+  if (!(w.norm() > 0.0)) return;
+  q.col(0) = w / w.norm();
+  int built = 0;
+  for (int j = 0; j < size; ++j) {
+    // w = A q_j = M^-1/2 K M^-1/2 q_j, K x ~ (f(u + epsilon x) - f(u)) / epsilon
+    double largest = 0.0;
+    for (std::size_t d = 0; d < dofs; ++d) largest = std::max(largest, std::abs(q(static_cast<Eigen::Index>(d), j) / root_mass[d]));
+    const double epsilon = perturbation_length_ / largest;
+    for (std::size_t d = 0; d < dofs; ++d)
+      perturbed[d] = u_[d] + epsilon * q(static_cast<Eigen::Index>(d), j) / root_mass[d];
+    ++monitor_force_evaluations_;
+    if (model_->internal_forces(perturbed, f1) >= 0) return;
+    for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = (f1[d] - f0[d]) / (epsilon * root_mass[d]);
+    alpha[j] = q.col(j).dot(w);
+    built = j + 1;
+    // Full reorthogonalisation, twice (the forward difference makes A slightly unsymmetric).
+    for (int pass = 0; pass < 2; ++pass) w -= q.leftCols(built) * (q.leftCols(built).transpose() * w);
+    beta[j] = w.norm();
+    if (j + 1 == size || !(beta[j] > 1e-10 * std::abs(alpha[j]))) break;
+    q.col(j + 1) = w / beta[j];
+  }
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(built, built);
+  for (int j = 0; j < built; ++j) {
+    t(j, j) = alpha[j];
+    if (j + 1 < built) t(j, j + 1) = t(j + 1, j) = beta[j];
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(t);
+  const double lambda = ritz.eigenvalues()[built - 1];
+  if (!(lambda > 0.0) || !std::isfinite(lambda)) return;
+  const Eigen::VectorXd vector = q.leftCols(built) * ritz.eigenvectors().col(built - 1);
+  for (std::size_t d = 0; d < dofs; ++d) mode_[d] = vector[static_cast<Eigen::Index>(d)] / root_mass[d];
+
+  ++stable_step_checks_;
+  last_stable_step_ = 2.0 / std::sqrt(lambda);
+  if (last_stable_step_ < smallest_stable_step_) {
+    smallest_stable_step_ = last_stable_step_;
+    smallest_stable_step_at_ = load_.step;
+  }
+  log().debug("step {}: stable step re-estimated {:.4g} s (time step {:.4g} s)", load_.step, last_stable_step_,
+              step_size);
+  constexpr double kMargin = 1.05;
+  if (!(step_size > kMargin * last_stable_step_)) return;
+  // Where the fastest mode lives: the node with the largest share of it.
+  Index where = 0;
+  double share = 0.0;
+  for (std::size_t d = 0; d < dofs; ++d)
+    if (std::abs(mode_[d]) > share) {
+      share = std::abs(mode_[d]);
+      where = static_cast<Index>(d / 3);
+    }
+  throw node_instability(
+      load_.step, load_.time, "time_step_above_stable",
+      fmt::format("the time step {:.4g} s exceeds the stable step of the current state, {:.4g} s = "
+                  "2 / sqrt(lambda_max(M^-1 K)) re-estimated at step {} ({:.3g} times the setup estimate {:.4g} s); "
+                  "its fastest mode is largest at node {} at {} m; reduce /integrator/time_step_factor to {:.2g} or "
+                  "less",
+                  step_size, last_stable_step_, load_.step, last_stable_step_ / stable_time_step_, stable_time_step_,
+                  where, point_text(model_->nodes()[where]),
+                  0.9 * last_stable_step_ / step_size * integrator_->report().value("time_step_factor", 1.0)),
+      *model_, where);
+}
+
+json Simulation::stable_step_report() const {
+  if (stable_step_every_ <= 0) return nullptr;
+  json j = {{"every_steps", stable_step_every_},
+            {"checks", stable_step_checks_},
+            {"force_evaluations", monitor_force_evaluations_},
+            {"setup_estimate_s", stable_time_step_}};
+  if (stable_step_checks_ > 0) {
+    j["last_estimate_s"] = last_stable_step_;
+    j["smallest_estimate_s"] = smallest_stable_step_;
+    j["smallest_estimate_step"] = smallest_stable_step_at_;
+  }
+  return j;
 }
 
 void Simulation::check_energy(std::span<const double> u_new, double step_size) {
@@ -259,17 +389,12 @@ void Simulation::check_energy(std::span<const double> u_new, double step_size) {
   // dozen steps.
   constexpr double kMargin = 10.0;
   if (!(kinetic > kMargin * work_bound_) || kinetic <= 0.0) return;
-  Diagnostic d;
-  d.step = load_.step;
-  d.time = load_.time;
-  d.what = "energy_growth";
-  d.detail = fmt::format("kinetic energy {:.4g} J exceeds {:g} times the work the loads have put in ({:.4g} J): the "
-                         "solution is growing without bound (the fastest node is {} at {} m); reduce the time-step "
-                         "factor",
-                         kinetic, kMargin, work_bound_, fastest, point_text(model_->nodes()[fastest]));
-  d.nodes = {fastest};
-  d.coordinates = {model_->nodes()[fastest]};
-  throw InstabilityError(std::move(d));
+  throw node_instability(
+      load_.step, load_.time, "energy_growth",
+      fmt::format("kinetic energy {:.4g} J exceeds {:g} times the work the loads have put in ({:.4g} J): the solution "
+                  "is growing without bound (the fastest node is {} at {} m); reduce the time-step factor",
+                  kinetic, kMargin, work_bound_, fastest, point_text(model_->nodes()[fastest])),
+      *model_, fastest);
 }
 
 void Simulation::run(StepObserver* observer) {

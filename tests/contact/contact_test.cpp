@@ -2,7 +2,6 @@
 // simulation loop, on a small gel cylinder: parameter checks, non-penetration, Coulomb's law at every contact
 // node, and the friction coefficient's effect on the needle force.
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <cmath>
 #include <map>
@@ -59,15 +58,9 @@ struct Outcome {
   double spacing = 0.0;         // mean node spacing (m)
 };
 
-// Small clouds run fastest on one thread (and a shared CI machine does not stall on OpenMP barriers).
-struct OneThread {
-  int saved = omp_get_max_threads();
-  OneThread() { omp_set_num_threads(1); }
-  ~OneThread() { omp_set_num_threads(saved); }
-};
 
 Outcome run(const json& needle) {
-  const OneThread one_thread;
+  const test::OneThread one_thread;
   const Scene scene = make_scene(scene_json(needle));
   Simulation simulation(scene, test::catalog());
   simulation.run(nullptr);
@@ -178,7 +171,7 @@ TEST(RigidContact, RefusesACaptureRadiusInsideTheNeedle) {
 TEST(RigidContact, RefusesAnEntryOffTheBody) {
   json needle = needle_block(0.3);
   needle["entry"] = {0.0, 0.0, kHeight + 0.005};  // 5 mm above the top face
-  const OneThread one_thread;
+  const test::OneThread one_thread;
   const Scene scene = make_scene(scene_json(needle));
   try {
     Simulation simulation(scene, test::catalog());
@@ -265,7 +258,7 @@ TEST(RigidContact, BeforePunctureTheFootprintFollowsTheTip) {
   json needle = needle_block(0.3);
   needle["puncture_force"] = 100.0;
   needle["depth"] = kIndentation;
-  const OneThread one_thread;
+  const test::OneThread one_thread;
   const Scene scene = make_scene(scene_json(needle));
   Simulation simulation(scene, test::catalog());
   simulation.run(nullptr);

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <array>
 #include <cstdio>
@@ -13,6 +14,9 @@
 namespace fs = std::filesystem;
 
 namespace mtled::test {
+
+OneThread::OneThread() : saved_(omp_get_max_threads()) { omp_set_num_threads(1); }
+OneThread::~OneThread() { omp_set_num_threads(saved_); }
 
 fs::path source_dir() { return MTLED_TEST_SOURCE_DIR; }
 fs::path binary_dir() { return MTLED_TEST_BINARY_DIR; }

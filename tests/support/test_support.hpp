@@ -32,6 +32,19 @@ std::shared_ptr<Interface> make(const std::string& name, const json& block) {
   return catalog().create<Interface>(name, p);
 }
 
+// One OpenMP thread for the scope: small clouds run fastest on one thread (and a shared CI machine does not
+// stall on OpenMP barriers).
+class OneThread {
+ public:
+  OneThread();
+  ~OneThread();
+  OneThread(const OneThread&) = delete;
+  OneThread& operator=(const OneThread&) = delete;
+
+ private:
+  int saved_;
+};
+
 // A box [0,a]x[0,b]x[0,c] split into n_x n_y n_z cubes of 6 tets each; interior nodes moved at random by up
 // to `jitter` times the cell size (seeded, repeatable). Node sets "x0", "x1", "y0", "y1", "z0", "z1" hold
 // the faces.

@@ -52,11 +52,13 @@ struct Scene {
   ComponentBlock integrator;
   Parameters discretisation;
   Parameters output;
+  Parameters monitors;
 };
 
 // Kernel sections of a scene, declared like components.
 const ComponentDeclaration& discretisation_declaration();
 const ComponentDeclaration& output_declaration();
+const ComponentDeclaration& monitors_declaration();
 
 // Validates the whole scene, loading only the plugins it names. Throws InputError listing every problem,
 // each located with SceneDocument::locate.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mtled/constraints.hpp"
+#include "mtled/json.hpp"
 #include "mtled/model.hpp"
 #include "mtled/scene.hpp"
 
@@ -59,12 +60,17 @@ class Simulation {
   long force_evaluations() const { return force_evaluations_; }
   // Interpolated displacement at every node (3 per node).
   std::vector<double> interpolated_displacement() const;
+  // The stable-step monitor's record for summary.json (null when /monitors/stable_step_every_steps is 0).
+  json stable_step_report() const;
 
  private:
   void update_drivers();
   void check_finite(std::span<const double> u_new, double new_time) const;
   // Stops the run (InstabilityError "energy_growth") when the kinetic energy exceeds what the loads put in.
   void check_energy(std::span<const double> u_new, double step_size);
+  // Stops the run (InstabilityError "time_step_above_stable") when the step exceeds 2 / sqrt(lambda_max) of
+  // M^-1 K at the current state, lambda_max estimated by Lanczos iteration on force differences.
+  void check_stable_step(double step_size);
 
   std::unique_ptr<Model> model_;
   std::vector<std::shared_ptr<BoundaryCondition>> boundaries_;
@@ -88,6 +94,14 @@ class Simulation {
   double work_bound_ = 0.0;
   double previous_step_size_ = 0.0;
   std::vector<double> u_free_;  // this step's displacements before the constraint projection
+
+  long stable_step_every_ = 0;
+  int stable_step_iterations_ = 0;
+  double perturbation_length_ = 0.0;  // largest nodal perturbation of the force differences (m)
+  std::vector<double> mode_;          // the last Ritz vector of the fastest mode, the next check's start
+  long stable_step_checks_ = 0, monitor_force_evaluations_ = 0;
+  double last_stable_step_ = 0.0, smallest_stable_step_ = INFINITY;
+  long smallest_stable_step_at_ = 0;
 };
 
 }  // namespace mtled

@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <random>
 
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
@@ -61,9 +63,30 @@ struct Generation {
   Index nodes = 0;
 };
 
+// Finer mesh along a segment (a needle's path): size ratio x h within `distance` of the segment, growing
+// linearly to h over `transition` beyond it.
+struct Refinement {
+  Vec3 from, to;
+  double ratio, distance, transition;
+};
+
+std::optional<Refinement> read_refinement(const Parameters& p) {
+  const auto from = p.optional_vector3("refine_from");
+  const auto to = p.optional_vector3("refine_to");
+  if (!from && !to) return std::nullopt;
+  if (!from || !to)
+    throw InputError(p.pointer(from ? "refine_to" : "refine_from"),
+                     "refine_from and refine_to go together: give both ends of the segment to refine along (for a "
+                     "needle, its entry point and its tip at the final depth)");
+  const double distance = p.number("refine_distance");
+  return Refinement{*from, *to, p.number("refine_ratio"), distance,
+                    p.optional_number("refine_transition").value_or(2.0 * distance)};
+}
+
 class Generator {
  public:
-  explicit Generator(const GeneratorRequest& request) : request_(request) {}
+  Generator(const GeneratorRequest& request, std::optional<Refinement> refinement)
+      : request_(request), refinement_(std::move(refinement)) {}
 
   const GeometryMeasure& measure() {
     if (!built_) build();
@@ -75,6 +98,10 @@ class Generator {
     gmsh_checked([&] {
       if (meshed_) gmsh::model::mesh::clear();
       gmsh::option::setNumber("Mesh.MeshSizeMax", mesh_size);
+      if (refinement_) {
+        gmsh::model::mesh::field::setNumber(kThresholdField, "SizeMin", refinement_->ratio * mesh_size);
+        gmsh::model::mesh::field::setNumber(kThresholdField, "SizeMax", mesh_size);
+      }
       gmsh::model::mesh::generate(3);
     });
     meshed_ = true;
@@ -96,8 +123,31 @@ class Generator {
     meshed_ = false;
     measure_ = request_.build_geometry();
     if (!(measure_.volume > 0.0) || !(measure_.surface_area > 0.0)) throw GmshError("the geometry has no volume");
+    if (refinement_) add_refinement_field(*refinement_);
     built_ = true;
   }
+
+  // Free geometric points along the segment (every quarter of the refinement distance: the distance to them
+  // is within 1/8 of it of the distance to the segment) feed a Distance field, which a Threshold field turns
+  // into sizes; the points are meshed as lone vertices, which remove_unused_nodes drops.
+  static void add_refinement_field(const Refinement& r) {
+    const double length = (r.to - r.from).norm();
+    const int intervals = std::max(1, static_cast<int>(std::ceil(length / (0.25 * r.distance))));
+    std::vector<double> points;
+    for (int i = 0; i <= intervals; ++i) {
+      const Vec3 x = r.from + (r.to - r.from) * (static_cast<double>(i) / intervals);
+      points.push_back(gmsh::model::occ::addPoint(x[0], x[1], x[2]));
+    }
+    gmsh::model::occ::synchronize();
+    gmsh::model::mesh::field::add("Distance", kDistanceField);
+    gmsh::model::mesh::field::setNumbers(kDistanceField, "PointsList", points);
+    gmsh::model::mesh::field::add("Threshold", kThresholdField);
+    gmsh::model::mesh::field::setNumber(kThresholdField, "InField", kDistanceField);
+    gmsh::model::mesh::field::setNumber(kThresholdField, "DistMin", r.distance);
+    gmsh::model::mesh::field::setNumber(kThresholdField, "DistMax", r.distance + r.transition);
+    gmsh::model::mesh::field::setAsBackgroundMesh(kThresholdField);
+  }
+  static constexpr int kDistanceField = 1, kThresholdField = 2;
 
   // Gross failures (a volume left unmeshed) show as missing volume; the polygonal approximation of curved
   // faces stays far below a quarter of the volume even on the coarsest meshes allowed.
@@ -111,6 +161,7 @@ class Generator {
   }
 
   const GeneratorRequest& request_;
+  std::optional<Refinement> refinement_;
   GeometryMeasure measure_;
   bool built_ = false;
   bool meshed_ = false;
@@ -174,6 +225,48 @@ Generation calibrated_generation(Generator& generator, const Parameters& paramet
   return std::move(*best);
 }
 
+// Stability studies need poor clouds: moves each interior node by a uniform random vector in a ball of radius
+// `jitter` x its mean edge length (a fixed seed: the same scene gives the same cloud). A move that would leave
+// an adjacent tet with less than 1% of its volume is halved, up to four times, then dropped, so the mesh stays
+// valid (every tet positive) but gains slivers. Surface nodes stay: the geometry and its node sets are kept.
+void jitter_interior_nodes(TetMesh& mesh, double jitter, const std::string& component) {
+  const auto surface = surface_nodes(mesh);
+  const auto spacing = mean_edge_length_at_nodes(mesh);
+  std::vector<std::vector<Index>> node_tets(mesh.points.size());
+  for (Index t = 0; t < mesh.tet_count(); ++t)
+    for (Index n : mesh.tets[t]) node_tets[n].push_back(t);
+  std::vector<double> original(static_cast<std::size_t>(mesh.tet_count()));
+  for (Index t = 0; t < mesh.tet_count(); ++t) original[t] = tet_volume(mesh, t);
+  std::mt19937_64 random(20261123);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  Index moved = 0;
+  for (std::size_t n = 0; n < mesh.points.size(); ++n) {
+    if (surface[n] || node_tets[n].empty()) continue;
+    Vec3 offset;
+    do offset = Vec3(uniform(random), uniform(random), uniform(random));
+    while (offset.squaredNorm() > 1.0);
+    offset *= jitter * spacing[n];
+    const Vec3 home = mesh.points[n];
+    for (int attempt = 0; attempt < 5; ++attempt, offset *= 0.5) {
+      mesh.points[n] = home + offset;
+      bool valid = true;
+      for (Index t : node_tets[n]) valid = valid && tet_volume(mesh, t) >= 0.01 * original[t];
+      if (valid) break;
+      mesh.points[n] = home;
+    }
+    moved += mesh.points[n] != home ? 1 : 0;
+  }
+  double smallest = INFINITY;
+  Index slivers = 0;
+  for (Index t = 0; t < mesh.tet_count(); ++t) {
+    const double ratio = tet_volume(mesh, t) / original[t];
+    smallest = std::min(smallest, ratio);
+    slivers += ratio < 0.1 ? 1 : 0;
+  }
+  log().info("{}: jitter {:g} moved {} interior nodes; {} tets kept less than 10% of their volume (smallest {:.3g}%)",
+             component, jitter, moved, slivers, 100.0 * smallest);
+}
+
 }  // namespace
 
 void declare_mesh_size(ComponentDeclaration& declaration, long default_target_nodes) {
@@ -193,6 +286,35 @@ void declare_mesh_size(ComponentDeclaration& declaration, long default_target_no
           "target tet edge length (Gmsh's Mesh.MeshSizeMax), used directly in one generation; when given, "
           "target_nodes is ignored. Refused when it would give more than 5 million nodes, or when it exceeds a "
           "cylinder's radius");
+  declaration.number("jitter")
+      .defaults(0.0)
+      .at_least(0.0)
+      .less_than(0.5)
+      .unit("1")
+      .doc(
+          "for stability studies: move each interior node randomly by up to this fraction of its mean edge length "
+          "(deterministic; moves that would leave a tet with under 1% of its volume are shortened), giving an "
+          "irregular, sliver-rich cloud; 0 keeps Gmsh's nodes");
+  declaration.vector3("refine_from").optional().unit("m").doc(
+      "with refine_to: refine the mesh along the segment between them (for a needle: its entry point and its tip "
+      "at the final depth); target_nodes then counts the refined mesh's nodes");
+  declaration.vector3("refine_to").optional().unit("m").doc("the other end of the segment to refine along");
+  declaration.number("refine_ratio")
+      .defaults(0.4)
+      .greater_than(0.0)
+      .at_most(1.0)
+      .unit("1")
+      .doc("mesh size near the segment as a fraction of the size elsewhere");
+  declaration.number("refine_distance")
+      .defaults(0.002)
+      .positive()
+      .unit("m")
+      .doc("distance from the segment within which the refined size holds");
+  declaration.number("refine_transition")
+      .optional()
+      .positive()
+      .unit("m")
+      .doc("distance beyond refine_distance over which the size grows back (default: 2 x refine_distance)");
 }
 
 Vec3 positive_extent(const Parameters& parameters, std::string_view name) {
@@ -215,7 +337,7 @@ TetMesh generate_tet_mesh(const Parameters& parameters, const GeneratorRequest& 
   Generation result;
   try {
     GmshSession session;
-    Generator generator(request);
+    Generator generator(request, read_refinement(parameters));
     if (mesh_size) {
       const double estimate = model_node_count(generator.measure(), *mesh_size);
       if (estimate > kMaxEstimatedNodes)
@@ -243,6 +365,11 @@ TetMesh generate_tet_mesh(const Parameters& parameters, const GeneratorRequest& 
                                  e.what(), request.failure_advice));
   }
   result.mesh.source = request.description;
+  if (const double jitter = parameters.number("jitter"); jitter > 0.0) {
+    remove_unused_nodes(result.mesh);
+    jitter_interior_nodes(result.mesh, jitter, request.component);
+    result.mesh.source += fmt::format(", interior nodes jittered by {:g} edge lengths", jitter);
+  }
   return std::move(result.mesh);
 }
 

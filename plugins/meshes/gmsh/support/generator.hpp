@@ -11,7 +11,7 @@
 
 namespace mtled {
 
-// Declares "target_nodes" (default `default_target_nodes`) and "mesh_size" on a generator.
+// Declares "target_nodes" (default `default_target_nodes`), "mesh_size" and "jitter" on a generator.
 void declare_mesh_size(ComponentDeclaration& declaration, long default_target_nodes);
 
 struct GeneratorRequest {
