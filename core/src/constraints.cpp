@@ -31,18 +31,30 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
     std::set<Index> claimed;
     for (std::size_t s = 0; s < sets_.size(); ++s) {
       NodalConstraints& set = *sets_[s];
-      set.reactions.assign(set.nodes.size(), Vec3::Zero());
-      if (set.values.size() != set.nodes.size())
-        throw std::logic_error(fmt::format("constraint set \"{}\": {} values for {} nodes", set.name,
-                                           set.values.size(), set.nodes.size()));
+      set.reactions.assign(set.size(), Vec3::Zero());
+      if (set.values.size() != set.size() || (!set.points.empty() && !set.nodes.empty()))
+        throw std::logic_error(fmt::format("constraint set \"{}\": {} values for {} nodes and {} points", set.name,
+                                           set.values.size(), set.nodes.size(), set.points.size()));
       if (!set.components[c]) continue;
-      for (std::size_t k = 0; k < set.nodes.size(); ++k)
-        if (claimed.insert(set.nodes[k]).second) comp.rows.push_back({s, k});
+      // Material points never coincide with one another's rows by construction; nodes may be claimed twice.
+      for (std::size_t k = 0; k < set.size(); ++k)
+        if (!set.points.empty() || claimed.insert(set.nodes[k]).second) comp.rows.push_back({s, k});
     }
     const auto m = static_cast<Eigen::Index>(comp.rows.size());
     std::vector<Eigen::Triplet<double>> triplets;
+    std::vector<Index> support;
+    std::vector<double> values;
     for (Eigen::Index r = 0; r < m; ++r) {
-      const Index node = sets_[comp.rows[r].set]->nodes[comp.rows[r].entry];
+      const NodalConstraints& set = *sets_[comp.rows[r].set];
+      if (!set.points.empty()) {
+        const Vec3& x = set.points[comp.rows[r].entry];
+        if (!model_.shape_functions_at(x, support, values))
+          throw std::logic_error(fmt::format("constraint set \"{}\": no shape functions at ({:g}, {:g}, {:g})",
+                                             set.name, x[0], x[1], x[2]));
+        for (std::size_t k = 0; k < support.size(); ++k) triplets.emplace_back(r, support[k], values[k]);
+        continue;
+      }
+      const Index node = set.nodes[comp.rows[r].entry];
       for (std::int64_t k = psi.offsets[node]; k < psi.offsets[node + 1]; ++k)
         triplets.emplace_back(r, psi.nodes[k], psi.values[k]);
     }

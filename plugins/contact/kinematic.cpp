@@ -2,16 +2,19 @@
 // parameters, no tissue-needle friction model:
 //  - indentation: the surface nodes under the tip (the footprint) follow the tip until the largest
 //    principal Green strain at the integration points near the tip exceeds the puncture strain;
-//  - penetration: each node within the capture radius of the axis is captured when the tip passes its
-//    current position, and from then on is driven along the axis at C_D times the needle's further advance,
-//    keeping its lateral position (the gel sticks to the shaft). Captured at their current displacement,
-//    nodes never jump.
+//  - penetration: each node within the capture radius of the axis (or, with `driven` = shaft_surface, each
+//    material point on rings on the shaft's surface) is captured when the tip passes it and from then on is
+//    driven along the axis at C_D times the needle's advance (`drive` says from when), its lateral
+//    displacement held, returned to the needle's path or left free (`lateral`). Captured at their current
+//    displacement, driven entries never jump.
 // The needle force is the force needed to impose this motion: the sum of the driven nodes' reactions along
 // the axis. Every modelling choice the paper leaves open is listed in docs/needle-models.md.
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
+#include "mtled/errors.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
 #include "needle_geometry.hpp"
@@ -37,11 +40,33 @@ class KinematicNeedle final : public NeedleModel {
         .defaults(1e-5)
         .doc("epsilon_p: the needle punctures the surface when the largest principal Green strain near the tip "
              "exceeds this (the paper: 1e-5, a very short indentation)");
+    d.string("drive")
+        .defaults("from_reference")
+        .choices({"since_capture", "from_reference"})
+        .doc("since_capture: a node is captured when the tip reaches its current axial position and then moves "
+             "C_D times the advance since; from_reference: captured when the tip reaches its reference axial "
+             "position s, its axial displacement is then C_D x (advance - s) once that exceeds what it had at "
+             "capture, so the final driven displacements depend on the geometry alone, not on the material");
+    d.string("lateral")
+        .defaults("path")
+        .choices({"held", "path", "free"})
+        .doc("a driven node's displacement across the axis: held at its value at capture; path: returned to "
+             "zero (the tissue stays on the straight needle's path) over one node spacing of advance; free: "
+             "only the axial component is prescribed (needs a direction along a coordinate axis)");
+    d.string("driven")
+        .defaults("shaft_surface")
+        .choices({"nodes_near_axis", "shaft_surface"})
+        .doc("what the shaft drives: nodes_near_axis, the nodes within capture_radius of the axis (the paper's "
+             "\"nodes located close to the needle shaft\"); shaft_surface, material points on rings on the "
+             "shaft's surface (radius = the needle's, one ring per node spacing at the entry, about one point per "
+             "node spacing around), whose interpolated displacement is prescribed: the same needle on every cloud, "
+             "symmetric about its axis");
     d.number("capture_radius")
         .unit("m")
         .positive()
         .optional()
-        .doc("nodes within this distance of the needle axis are driven once the tip passes them; default: the "
+        .doc("with driven = nodes_near_axis, nodes within this distance of the needle axis are driven once the tip "
+             "passes them; the footprint (the surface nodes the tip indents) is chosen within it too; default: the "
              "larger of the needle radius and 0.6 x the node spacing at the entry, so a coarse cloud still has "
              "nodes on the path");
     d.number("strain_radius")
@@ -59,9 +84,25 @@ class KinematicNeedle final : public NeedleModel {
         coefficient_(p.number("deformation_coefficient")),
         puncture_strain_(p.number("puncture_strain")),
         capture_radius_option_(p.optional_number("capture_radius")),
-        strain_radius_option_(p.optional_number("strain_radius")) {
-    driven_.name = "needle";
-    driven_.components = {true, true, true};
+        strain_radius_option_(p.optional_number("strain_radius")),
+        from_reference_(p.string("drive") == "from_reference"),
+        lateral_(p.string("lateral")),
+        shaft_surface_(p.string("driven") == "shaft_surface") {
+    nodes_.constraints.name = "needle";
+    shaft_.constraints.name = "needle_shaft";
+    if (lateral_ == "free") {
+      // The kernel constrains whole Cartesian components, so "axial only" needs an axis-aligned needle.
+      const Vec3 d = path_.direction.cwiseAbs();
+      Index axis = 0;
+      d.maxCoeff(&axis);
+      if (d[axis] < 1.0 - 1e-12)
+        throw InputError(p.pointer("lateral"),
+                         fmt::format("\"free\" prescribes only the axial component, which needs a direction along "
+                                     "x, y or z; got ({:g}, {:g}, {:g}). Use \"held\" or \"path\", or rotate the "
+                                     "scene so that the needle runs along a coordinate axis",
+                                     path_.direction.x(), path_.direction.y(), path_.direction.z()));
+      nodes_.constraints.components = shaft_.constraints.components = {axis == 0, axis == 1, axis == 2};
+    }
   }
 
   void setup(const Model& model) override {
@@ -69,6 +110,7 @@ class KinematicNeedle final : public NeedleModel {
     const double spacing = spacing_at_entry(path_, model);
     capture_radius_ = capture_radius_option_.value_or(std::max(path_.radius, 0.6 * spacing));
     strain_radius_ = strain_radius_option_.value_or(std::max(2.0 * path_.radius, spacing));
+    lateral_ramp_ = spacing;
 
     // Footprint: surface nodes near the entry within the capture radius of the axis (at least the nearest).
     const auto& surface = model.surface();
@@ -86,93 +128,167 @@ class KinematicNeedle final : public NeedleModel {
     }
     if (footprint_.empty()) footprint_.push_back(nearest);
 
-    // Candidates for capture: nodes near the axis, ahead of the entry and within reach of the final depth,
-    // ordered along the path.
-    for (Index i = 0; i < model.node_count(); ++i) {
-      const Vec3& x = model.nodes()[i];
-      const double s = path_.axial(x);
-      if (path_.radial(x) <= capture_radius_ && s > -0.5 * spacing && s <= path_.depth + spacing)
-        candidates_.push_back(i);
+    if (shaft_surface_) {
+      place_shaft_points(model, spacing);
+    } else {
+      // Nodes near the axis, ahead of the entry and within reach of the final depth, ordered along the path.
+      for (Index i = 0; i < model.node_count(); ++i) {
+        const Vec3& x = model.nodes()[i];
+        const double s = path_.axial(x);
+        if (path_.radial(x) <= capture_radius_ && s > -0.5 * spacing && s <= path_.depth + spacing)
+          candidates_.push_back(i);
+      }
+      std::sort(candidates_.begin(), candidates_.end(), [&](Index a, Index b) {
+        return path_.axial(model.nodes()[a]) < path_.axial(model.nodes()[b]);
+      });
     }
-    std::sort(candidates_.begin(), candidates_.end(), [&](Index a, Index b) {
-      return path_.axial(model.nodes()[a]) < path_.axial(model.nodes()[b]);
-    });
     captured_.assign(static_cast<std::size_t>(model.node_count()), 0);
 
     // Integration points near the entry that the puncture test watches during indentation.
     for (Index ip = 0; ip < model.integration_point_count(); ++ip)
       if ((model.ip_positions()[ip] - path_.entry).norm() <= strain_radius_ + path_.depth) watched_.push_back(ip);
 
-    for (Index n : footprint_) drive(n, Vec3::Zero(), 0.0);
-    log().info("kinematic needle: footprint {} nodes, {} candidate nodes within {:.3g} mm of the axis, C_D = {:g}",
-               footprint_.size(), candidates_.size(), 1e3 * capture_radius_, coefficient_);
+    for (Index n : footprint_) {
+      captured_[n] = 1;
+      nodes_.constraints.nodes.push_back(n);
+      nodes_.add(path_.axial(model.nodes()[n]), Vec3::Zero(), 0.0);
+    }
+    if (shaft_surface_)
+      log().info("kinematic needle: footprint {} nodes, {} points on the shaft's surface in {} rings, C_D = {:g}",
+                 footprint_.size(), shaft_candidates_.size(), rings_, coefficient_);
+    else
+      log().info("kinematic needle: footprint {} nodes, {} candidate nodes within {:.3g} mm of the axis, C_D = {:g}",
+                 footprint_.size(), candidates_.size(), 1e3 * capture_radius_, coefficient_);
   }
 
   void update(const LoadState& load, const Model& model, std::span<const double> u) override {
     const double advance = load.load_fraction * path_.depth;
     if (punctured_) {
-      capture_passed_nodes(model, u, advance);
+      capture_passed(model, u, advance);
     } else if (largest_strain_near_tip(model, u, advance) > puncture_strain_) {
       punctured_ = true;
       puncture_depth_ = depth_;
       log().info("kinematic needle: puncture at depth {:.4g} mm", 1e3 * puncture_depth_);
-      capture_passed_nodes(model, u, advance);
+      capture_passed(model, u, advance);
     }
     depth_ = advance;
-    // Prescribed displacements: the footprint follows the tip until puncture; afterwards every driven node
-    // moves C_D times the advance since its capture along the axis.
-    for (std::size_t k = 0; k < driven_.nodes.size(); ++k) {
-      const double since = std::max(0.0, advance - capture_depth_[k]);
-      const double rate = punctured_ ? coefficient_ : 1.0;
-      driven_.values[k] = captured_at_[k] + rate * since * path_.direction;
-    }
+    for (DrivenSet* set : {&nodes_, &shaft_})
+      for (std::size_t k = 0; k < set->constraints.size(); ++k) set->constraints.values[k] = prescribed(*set, k, advance);
   }
 
-  std::vector<NodalConstraints*> constraints() override { return {&driven_}; }
+  std::vector<NodalConstraints*> constraints() override {
+    if (shaft_surface_) return {&nodes_.constraints, &shaft_.constraints};
+    return {&nodes_.constraints};
+  }
 
   NeedleStatus status() const override {
     NeedleStatus s;
     s.depth = depth_;
     double force = 0.0;
-    for (const auto& r : driven_.reactions) force += r.dot(path_.direction);
+    for (const DrivenSet* set : {&nodes_, &shaft_})
+      for (const auto& r : set->constraints.reactions) force += r.dot(path_.direction);
     s.force = force;
     s.phase = punctured_ ? "penetration" : "indentation";
     s.puncture_depth = punctured_ ? puncture_depth_ : -1.0;
-    s.driven_nodes = static_cast<Index>(driven_.nodes.size());
+    s.driven_nodes = static_cast<Index>(nodes_.constraints.size() + shaft_.constraints.size());
     return s;
   }
 
  private:
-  void drive(Index node, const Vec3& displacement, double advance) {
-    captured_[node] = 1;
-    driven_.nodes.push_back(node);
-    driven_.values.push_back(displacement);
-    captured_at_.push_back(displacement);
-    capture_depth_.push_back(advance);
-    ++driven_.revision;
+  // A constraint set the needle drives and, per entry, what its law needs.
+  struct DrivenSet {
+    NodalConstraints constraints;
+    std::vector<Vec3> captured_at;        // displacement when the current driving began
+    std::vector<double> capture_depth;    // needle advance when the current driving began
+    std::vector<double> reference_axial;  // axial coordinate of the entry's reference position
+
+    // The caller has appended the node or point itself.
+    void add(double reference, const Vec3& displacement, double advance) {
+      constraints.values.push_back(displacement);
+      captured_at.push_back(displacement);
+      capture_depth.push_back(advance);
+      reference_axial.push_back(reference);
+      ++constraints.revision;
+    }
+    void clear() {
+      constraints.nodes.clear();
+      constraints.points.clear();
+      constraints.values.clear();
+      captured_at.clear();
+      capture_depth.clear();
+      reference_axial.clear();
+      ++constraints.revision;
+    }
+  };
+
+  // Rings of points on the shaft's surface, one per `spacing` along the path from the entry to the final depth,
+  // each with about one point per spacing around (at least 3), alternate rings turned by half a step. Points
+  // outside every support (off the body) are left out.
+  void place_shaft_points(const Model& model, double spacing) {
+    const Vec3 e1 = path_.direction.unitOrthogonal();
+    const Vec3 e2 = path_.direction.cross(e1);
+    const int around = std::max(3, static_cast<int>(std::lround(2.0 * M_PI * path_.radius / spacing)));
+    std::vector<Index> support;
+    std::vector<double> values;
+    for (double s = 0.0; s <= path_.depth + 1e-12 * spacing; s += spacing, ++rings_) {
+      for (int j = 0; j < around; ++j) {
+        const double angle = 2.0 * M_PI * (j + 0.5 * (rings_ % 2)) / around;
+        const Vec3 x = path_.tip(s) + path_.radius * (std::cos(angle) * e1 + std::sin(angle) * e2);
+        if (!model.shape_functions_at(x, support, values)) continue;
+        shaft_candidates_.push_back({x, support, values});
+      }
+    }
   }
 
-  // Restart the footprint nodes at puncture: from now on they move with C_D like every captured node.
-  void capture_passed_nodes(const Model& model, std::span<const double> u, double advance) {
+  // The displacement of entry k of `set` at this advance: the footprint follows the tip until puncture;
+  // afterwards every driven entry moves along the axis at C_D times the advance (`drive`), its lateral part
+  // as `lateral` says.
+  Vec3 prescribed(const DrivenSet& set, std::size_t k, double advance) const {
+    const Vec3& start = set.captured_at[k];
+    const double start_axial = start.dot(path_.direction);
+    const Vec3 start_lateral = start - start_axial * path_.direction;
+    const double since = std::max(0.0, advance - set.capture_depth[k]);
+    double axial = start_axial + (punctured_ ? coefficient_ : 1.0) * since;
+    if (punctured_ && from_reference_)
+      axial = std::max(start_axial, coefficient_ * (advance - set.reference_axial[k]));
+    double lateral_share = 1.0;
+    if (lateral_ == "path") lateral_share = std::max(0.0, 1.0 - since / lateral_ramp_);
+    return axial * path_.direction + lateral_share * start_lateral;
+  }
+
+  // Captures what the tip has passed. At the first call (puncture) the footprint restarts: from then on it
+  // moves with C_D like every captured entry; with shaft_surface the ring at the entry replaces it (the
+  // footprint, a few nodes on one side of the axis, would pull the surface off-centre for the whole insertion).
+  void capture_passed(const Model& model, std::span<const double> u, double advance) {
     if (!restarted_footprint_) {
-      for (std::size_t k = 0; k < driven_.nodes.size(); ++k) {
-        captured_at_[k] = driven_.values[k];
-        capture_depth_[k] = depth_;
+      for (std::size_t k = 0; k < nodes_.constraints.size(); ++k) {
+        nodes_.captured_at[k] = nodes_.constraints.values[k];
+        nodes_.capture_depth[k] = depth_;
       }
+      if (shaft_surface_) nodes_.clear();
       restarted_footprint_ = true;
     }
-    while (next_candidate_ < candidates_.size()) {
+    // The tip passes an entry when its advance reaches the entry's current (or reference) axial position.
+    auto passed = [&](const Vec3& reference, const Vec3& displacement) {
+      return advance >= path_.axial(from_reference_ ? reference : Vec3(reference + displacement));
+    };
+    for (; next_candidate_ < candidates_.size(); ++next_candidate_) {
       const Index n = candidates_[next_candidate_];
-      if (captured_[n]) {
-        ++next_candidate_;
-        continue;
-      }
-      // The tip passes the node when its advance reaches the node's current axial position.
+      if (captured_[n]) continue;
       const Vec3 displacement = model.interpolate_node(n, u);
-      const double position = path_.axial(model.nodes()[n] + displacement);
-      if (advance < position) break;
-      drive(n, displacement, advance);
-      ++next_candidate_;
+      if (!passed(model.nodes()[n], displacement)) break;
+      captured_[n] = 1;
+      nodes_.constraints.nodes.push_back(n);
+      nodes_.add(path_.axial(model.nodes()[n]), displacement, advance);
+    }
+    for (; next_point_ < shaft_candidates_.size(); ++next_point_) {
+      const ShaftPoint& point = shaft_candidates_[next_point_];
+      Vec3 displacement = Vec3::Zero();
+      for (std::size_t k = 0; k < point.support.size(); ++k)
+        displacement += point.values[k] * Vec3(&u[3 * static_cast<std::size_t>(point.support[k])]);
+      if (!passed(point.position, displacement)) break;
+      shaft_.constraints.points.push_back(point.position);
+      shaft_.add(path_.axial(point.position), displacement, advance);
     }
   }
 
@@ -189,18 +305,27 @@ class KinematicNeedle final : public NeedleModel {
     return largest;
   }
 
+  struct ShaftPoint {
+    Vec3 position;  // reference
+    std::vector<Index> support;
+    std::vector<double> values;
+  };
+
   Parameters parameters_;
   NeedlePath path_;
   double coefficient_, puncture_strain_;
   std::optional<double> capture_radius_option_, strain_radius_option_;
-  double capture_radius_ = 0.0, strain_radius_ = 0.0;
+  bool from_reference_;
+  std::string lateral_;  // "held", "path" or "free"
+  bool shaft_surface_;
+  double capture_radius_ = 0.0, strain_radius_ = 0.0, lateral_ramp_ = 0.0;
 
   std::vector<Index> footprint_, candidates_, watched_;
+  std::vector<ShaftPoint> shaft_candidates_;  // ordered along the path
+  int rings_ = 0;
   std::vector<char> captured_;
-  std::size_t next_candidate_ = 0;
-  NodalConstraints driven_;
-  std::vector<Vec3> captured_at_;     // displacement when the current driving began
-  std::vector<double> capture_depth_;  // needle advance when the current driving began
+  std::size_t next_candidate_ = 0, next_point_ = 0;
+  DrivenSet nodes_, shaft_;  // footprint and captured nodes; captured shaft points
   bool punctured_ = false, restarted_footprint_ = false;
   double depth_ = 0.0, puncture_depth_ = 0.0;
 };

@@ -2,8 +2,8 @@
 // Essential boundary conditions for non-interpolating shape functions (simplified EBCIEM, Joldes,
 // Chowdhury, Wittek, Miller, EABE 2017). After each unconstrained update u_pred the kernel applies
 //   u = u_pred + M^-1 Phi^T y,   y = (Phi M^-1 Phi^T)^-1 (u_bar - Phi u_pred),
-// per displacement component, where row K of Phi holds the shape functions at constrained node K. Then
-// the interpolated displacement at every constrained node equals the prescribed one to round-off, and the
+// per displacement component, where row K of Phi holds the shape functions at constrained node (or material
+// point) K. Then the interpolated displacement there equals the prescribed one to round-off, and the
 // reaction at K is lambda_K = y_K / alpha (alpha: the integrator's factor on M^-1 f in its update).
 // The matrices are factorised once per change of the constrained sets.
 #include <Eigen/SparseCholesky>

@@ -14,16 +14,19 @@ namespace mtled {
 class Model;
 
 // Displacements a driver prescribes: the *interpolated* displacement u(X_K) = sum_I N_I(X_K) u_I at each
-// listed node K, for the constrained components. The kernel enforces them after every step (simplified
-// EBCIEM) and writes back the reaction, the force the constraint exerts on the body at each node.
+// listed node K, or at each listed material point X_K (reference coordinates inside the body), for the
+// constrained components. A set lists nodes or points, not both. The kernel enforces them after every step
+// (simplified EBCIEM) and writes back the reaction, the force the constraint exerts on the body at each entry.
 struct NodalConstraints {
   std::string name;  // the "set" column of reactions.csv
   std::vector<Index> nodes;
+  std::vector<Vec3> points;  // used instead of `nodes` when not empty
   std::array<bool, 3> components{true, true, true};
-  std::vector<Vec3> values;     // one per node
-  std::vector<Vec3> reactions;  // one per node, written by the kernel (N)
-  std::uint64_t revision = 0;   // bump when `nodes` or `components` change
+  std::vector<Vec3> values;     // one per entry
+  std::vector<Vec3> reactions;  // one per entry, written by the kernel (N)
+  std::uint64_t revision = 0;   // bump when `nodes`, `points` or `components` change
 
+  std::size_t size() const { return points.empty() ? nodes.size() : points.size(); }
   Vec3 total_reaction() const;
 };
 

@@ -1,0 +1,175 @@
+// The kinematic needle (plugins/contact/kinematic.cpp, the paper's model) through the real loader and the
+// real simulation loop, on a small gel cylinder: puncture and penetration, C_D at the entry, and the
+// options of docs/needle-models.md ("drive", "lateral") as they show in the converged state.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mtled/errors.hpp"
+#include "mtled/scene.hpp"
+#include "mtled/simulation.hpp"
+#include "test_support.hpp"
+
+namespace mtled {
+namespace {
+
+// A cylinder of the paper's gel, r = 6 mm, h = 8 mm, about 600 nodes (spacing 1.3 mm), bottom fixed; a 1.6 mm
+// needle along -z through the top centre to 5 mm with C_D = 0.4.
+constexpr double kDepth = 5e-3;
+constexpr double kHeight = 8e-3;
+constexpr double kCoefficient = 0.4;
+
+json scene_json(const json& needle_options, const json& direction = {0, 0, -1}) {
+  json needle = {{"type", "kinematic"},  {"diameter", 1.6e-3},        {"entry", {0.0, 0.0, kHeight}},
+                 {"direction", direction}, {"depth", kDepth}, {"deformation_coefficient", kCoefficient}};
+  needle.update(needle_options);
+  return {{"mesh", {{"type", "cylinder"}, {"radius", 0.006}, {"height", kHeight}, {"target_nodes", 600}}},
+          {"shape_function", {{"type", "mmls"}}},
+          {"materials", {{{"type", "ogden"}, {"mu", 722}, {"alpha", -1.3}, {"D", 5.57738e-5}, {"density", 1000}}}},
+          {"boundaries", {{{"type", "fixed"}, {"name", "bottom"}, {"nodes", {{"group", "bottom"}}}}}},
+          {"needle", needle},
+          {"integrator",
+           {{"type", "dynamic_relaxation"}, {"load_steps", 300}, {"load_curve", "linear"}, {"tolerance", 1e-3}}}};
+}
+
+struct Driven {
+  double reference_axial;  // depth of the node's reference position below the entry (m)
+  Vec3 displacement;       // interpolated, final
+};
+struct Outcome {
+  NeedleStatus status;
+  std::array<bool, 3> components{};
+  std::vector<Driven> driven;       // nodes
+  std::vector<Driven> shaft;        // material points on the shaft's surface
+  std::vector<Vec3> shaft_offsets;  // their reference offsets from the axis
+  double spacing = 0.0;
+};
+
+
+Outcome run(const json& needle_options) {
+  const test::OneThread one_thread;
+  const Scene scene = validate_scene(parse_scene(scene_json(needle_options).dump(), "kinematic_test.json"),
+                                     test::catalog());
+  Simulation simulation(scene, test::catalog());
+  simulation.run(nullptr);
+  Outcome out;
+  out.status = simulation.needle()->status();
+  const Model& model = simulation.model();
+  const std::vector<double> u = simulation.interpolated_displacement();
+  for (const NodalConstraints* set : simulation.constraint_sets()) {
+    if (set->name == "needle") {
+      out.components = set->components;
+      for (Index n : set->nodes)
+        out.driven.push_back({kHeight - model.nodes()[n].z(), Vec3(u[3 * n], u[3 * n + 1], u[3 * n + 2])});
+    }
+    if (set->name != "needle_shaft") continue;
+    // The displacement interpolated at each point from the nodal parameters, independently of the kernel's rows.
+    std::vector<Index> support;
+    std::vector<double> values;
+    for (const Vec3& x : set->points) {
+      EXPECT_TRUE(model.shape_functions_at(x, support, values));
+      Vec3 displacement = Vec3::Zero();
+      for (std::size_t k = 0; k < support.size(); ++k)
+        displacement += values[k] * Vec3(simulation.displacement().subspan(3 * support[k], 3).data());
+      out.shaft.push_back({kHeight - x.z(), displacement});
+      out.shaft_offsets.push_back(Vec3(x.x(), x.y(), 0.0));
+    }
+  }
+  for (double h : model.node_spacing()) out.spacing += h / static_cast<double>(model.node_count());
+  return out;
+}
+
+// The paper's literal reading: nodes near the axis, C_D times the advance since capture, lateral held.
+const json kPaperNodes = {{"driven", "nodes_near_axis"}, {"drive", "since_capture"}, {"lateral", "held"}};
+
+TEST(KinematicNeedle, PuncturesThenDrivesTheEntryAtCdTimesTheAdvance) {
+  const Outcome out = run(kPaperNodes);
+  EXPECT_EQ(out.status.phase, "penetration");
+  EXPECT_GT(out.status.puncture_depth, 0.0);
+  EXPECT_LT(out.status.puncture_depth, 0.05 * kDepth);  // epsilon_p = 1e-5: a very short indentation
+  EXPECT_TRUE(std::isfinite(out.status.force));
+  EXPECT_GT(out.status.force, 0.0);  // the needle pushes the tissue along its direction
+  ASSERT_GE(out.driven.size(), 3u);
+  // The footprint (top surface) moves the puncture depth plus C_D times the rest of the advance: U2/U1 = C_D
+  // up to the short indentation, enforced on the interpolated field to round-off.
+  const double expected = out.status.puncture_depth + kCoefficient * (kDepth - out.status.puncture_depth);
+  int at_top = 0;
+  for (const Driven& d : out.driven) {
+    if (d.reference_axial > 1e-9) continue;
+    ++at_top;
+    EXPECT_NEAR(-d.displacement.z(), expected, 1e-12);
+  }
+  EXPECT_GE(at_top, 1);
+}
+
+TEST(KinematicNeedle, FromReferenceOnThePathGivesGeometricDisplacements) {
+  const Outcome out = run({{"driven", "nodes_near_axis"}, {"drive", "from_reference"}, {"lateral", "path"}});
+  ASSERT_GE(out.driven.size(), 3u);
+  int checked = 0;
+  for (const Driven& d : out.driven) {
+    // Captured when the tip reached its reference depth s: axial displacement C_D (depth - s), or more when
+    // the node had already been pulled further; lateral displacement returned to the path within one node
+    // spacing of advance.
+    EXPECT_GE(-d.displacement.z(), kCoefficient * (kDepth - d.reference_axial) - 1e-12);
+    if (d.reference_axial < kDepth - 2.0 * out.spacing) {
+      ++checked;
+      EXPECT_LT(std::hypot(d.displacement.x(), d.displacement.y()), 1e-12);
+    }
+  }
+  EXPECT_GE(checked, 2);
+}
+
+TEST(KinematicNeedle, FreeLateralPrescribesOnlyTheAxialComponent) {
+  const Outcome out = run({{"driven", "nodes_near_axis"}, {"lateral", "free"}});
+  EXPECT_EQ(out.components, (std::array<bool, 3>{false, false, true}));
+  EXPECT_EQ(out.status.phase, "penetration");
+  // Nothing holds the driven nodes across the axis: some move sideways.
+  double largest_lateral = 0.0;
+  for (const Driven& d : out.driven) largest_lateral = std::max(largest_lateral, std::hypot(d.displacement.x(), d.displacement.y()));
+  EXPECT_GT(largest_lateral, 1e-7);
+}
+
+TEST(KinematicNeedle, ShaftSurfacePointsFollowTheNeedleAroundTheAxis) {
+  const Outcome out = run(json::object());  // the defaults: shaft_surface, from_reference, path
+  EXPECT_EQ(out.status.phase, "penetration");
+  EXPECT_GT(out.status.force, 0.0);
+  ASSERT_GE(out.shaft.size(), 9u);  // rings of at least 3 points, one ring per node spacing down to 5 mm
+  Vec3 offset_sum = Vec3::Zero();
+  int checked = 0;
+  for (std::size_t k = 0; k < out.shaft.size(); ++k) {
+    const Driven& d = out.shaft[k];
+    EXPECT_NEAR(out.shaft_offsets[k].norm(), 0.8e-3, 1e-12);  // on the shaft's surface
+    offset_sum += out.shaft_offsets[k];
+    // The kernel enforced the prescribed value on the interpolated field: C_D (depth - s) at least, back on
+    // the path once the tip is a node spacing past.
+    EXPECT_GE(-d.displacement.z(), kCoefficient * (kDepth - d.reference_axial) - 1e-12);
+    if (d.reference_axial < kDepth - 2.0 * out.spacing) {
+      ++checked;
+      EXPECT_LT(std::hypot(d.displacement.x(), d.displacement.y()), 1e-12);
+    }
+    // The ring at the entry replaced the footprint at puncture: U2 / U1 = C_D exactly.
+    if (d.reference_axial < 1e-12) {
+      EXPECT_NEAR(-d.displacement.z(), kCoefficient * kDepth, 1e-12);
+    }
+  }
+  EXPECT_GE(checked, 3);
+  EXPECT_TRUE(out.driven.empty());
+  // Full rings: the points balance about the axis.
+  EXPECT_LT(offset_sum.norm(), 1e-12);
+}
+
+TEST(KinematicNeedle, FreeLateralRefusesAnObliqueNeedle) {
+  json scene = scene_json({{"lateral", "free"}}, {0.0, 0.6, -0.8});
+  try {
+    const Scene s = validate_scene(parse_scene(scene.dump(), "kinematic_test.json"), test::catalog());
+    Simulation simulation(s, test::catalog());
+    FAIL() << "an oblique needle with lateral free was accepted";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("/needle/lateral"), std::string::npos) << message;
+    EXPECT_NE(message.find("coordinate axis"), std::string::npos) << message;
+  }
+}
+
+}  // namespace
+}  // namespace mtled
