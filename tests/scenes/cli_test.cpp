@@ -163,19 +163,30 @@ TEST(Cli, APluginThatThrowsWhileBeingBuiltExitsTwo) {
 
 // A time step ten times the stable one grows without bound within a few steps. The run must stop with exit 3,
 // say where in summary.json and keep the last good state, and write nothing that looks like a result.
-void expect_detected_blow_up(const std::string& name, const json& integrator) {
-  const auto file = variant(name, [&](json& s) { s["integrator"] = integrator; });
+// With the stable-step monitor on, the step is refused at step 1, before anything moves; with it off, the
+// blow-up itself is caught.
+void expect_detected_blow_up(const std::string& name, const json& integrator, bool stable_step_monitor) {
+  const auto file = variant(name, [&](json& s) {
+    s["integrator"] = integrator;
+    if (!stable_step_monitor) s["monitors"] = {{"stable_step_every_steps", 0}};
+  });
   const fs::path out = file.parent_path() / "out";
   const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});
   EXPECT_EQ(result.exit_code, 3) << result.output;
   const json summary = test::read_json(out / "summary.json");
   EXPECT_EQ(summary["status"], "unstable");
   const json& d = summary["diagnostic"];
-  // Whichever monitor sees it first: the energy growth, an inverted integration point, a non-finite value.
-  EXPECT_TRUE(d["what"] == "energy_growth" || d["what"] == "inverted_material" || d["what"] == "non_finite")
-      << d.dump();
-  EXPECT_GT(d["step"].get<long>(), 0);
-  EXPECT_LT(d["step"].get<long>(), 50) << "a factor of 10 should be caught within a few dozen steps";
+  if (stable_step_monitor) {
+    EXPECT_EQ(d["what"], "time_step_above_stable") << d.dump();
+    EXPECT_EQ(d["step"].get<long>(), 1);
+    expect_contains(d["detail"].get<std::string>(), "/integrator/time_step_factor");
+  } else {
+    // Whichever monitor sees it first: the energy growth, an inverted integration point, a non-finite value.
+    EXPECT_TRUE(d["what"] == "energy_growth" || d["what"] == "inverted_material" || d["what"] == "non_finite")
+        << d.dump();
+    EXPECT_GT(d["step"].get<long>(), 0);
+    EXPECT_LT(d["step"].get<long>(), 50) << "a factor of 10 should be caught within a few dozen steps";
+  }
   EXPECT_FALSE(d["where"].empty());
   EXPECT_TRUE(d["where"][0].contains("coordinates_m")) << d.dump();
   EXPECT_FALSE(fs::exists(out / "result.vtu"));
@@ -183,21 +194,26 @@ void expect_detected_blow_up(const std::string& name, const json& integrator) {
 }
 
 TEST(Cli, TimeStepTenTimesTheStableOneIsDetected) {
-  expect_detected_blow_up("dr-factor-10", {{"type", "dynamic_relaxation"}, {"load_steps", 100}, {"tolerance", 1e-5},
-                                           {"time_step_factor", 10.0}});
-  expect_detected_blow_up("cd-factor-10", {{"type", "central_difference"}, {"duration", 0.3}, {"load_time", 0.2},
-                                           {"damping", 60.0},
-                                           {"time_step_factor", 10.0}});
+  const json relaxation = {{"type", "dynamic_relaxation"}, {"load_steps", 100}, {"tolerance", 1e-5}, {"time_step_factor", 10.0}};
+  const json dynamics = {{"type", "central_difference"}, {"duration", 0.3}, {"load_time", 0.2}, {"damping", 60.0},
+                         {"time_step_factor", 10.0}};
+  for (const bool monitor : {true, false}) {
+    const std::string suffix = monitor ? "" : "-no-stable-step-monitor";
+    expect_detected_blow_up("dr-factor-10" + suffix, relaxation, monitor);
+    expect_detected_blow_up("cd-factor-10" + suffix, dynamics, monitor);
+  }
 }
 
 // A slower blow-up (a factor of 4) under a load of 10 nm: each step multiplies the unstable mode's amplitude by
 // a few, so it takes a couple of dozen steps to invert a tet. The kinetic energy passes ten times the work the
-// prescribed motion has done long before: the energy monitor stops the run first.
+// prescribed motion has done long before: the energy monitor stops the run first. (The stable-step monitor,
+// which would refuse the step at step 1, is turned off to test the energy monitor on its own.)
 TEST(Cli, TheEnergyMonitorCatchesAGrowingModeBeforeItInvertsAnything) {
   const auto file = variant("energy-growth", [](json& s) {
     s["integrator"] = {{"type", "central_difference"}, {"duration", 0.3}, {"load_time", 0.2}, {"damping", 60.0},
                        {"time_step_factor", 4.0}};
     s["boundaries"][1]["displacement"] = {0.0, 0.0, -1e-8};
+    s["monitors"] = {{"stable_step_every_steps", 0}};
   });
   const fs::path out = file.parent_path() / "out";
   const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});
