@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
@@ -86,11 +87,11 @@ class KinematicNeedle final : public NeedleModel {
         capture_radius_option_(p.optional_number("capture_radius")),
         strain_radius_option_(p.optional_number("strain_radius")),
         from_reference_(p.string("drive") == "from_reference"),
-        lateral_(p.string("lateral")),
+        return_to_path_(p.string("lateral") == "path"),
         shaft_surface_(p.string("driven") == "shaft_surface") {
     nodes_.constraints.name = "needle";
     shaft_.constraints.name = "needle_shaft";
-    if (lateral_ == "free") {
+    if (p.string("lateral") == "free") {
       // The kernel constrains whole Cartesian components, so "axial only" needs an axis-aligned needle.
       const Vec3 d = path_.direction.cwiseAbs();
       Index axis = 0;
@@ -227,12 +228,12 @@ class KinematicNeedle final : public NeedleModel {
   void place_shaft_points(const Model& model, double spacing) {
     const Vec3 e1 = path_.direction.unitOrthogonal();
     const Vec3 e2 = path_.direction.cross(e1);
-    const int around = std::max(3, static_cast<int>(std::lround(2.0 * M_PI * path_.radius / spacing)));
+    const int around = std::max(3, static_cast<int>(std::lround(2.0 * std::numbers::pi * path_.radius / spacing)));
     std::vector<Index> support;
     std::vector<double> values;
     for (double s = 0.0; s <= path_.depth + 1e-12 * spacing; s += spacing, ++rings_) {
       for (int j = 0; j < around; ++j) {
-        const double angle = 2.0 * M_PI * (j + 0.5 * (rings_ % 2)) / around;
+        const double angle = 2.0 * std::numbers::pi * (j + 0.5 * (rings_ % 2)) / around;
         const Vec3 x = path_.tip(s) + path_.radius * (std::cos(angle) * e1 + std::sin(angle) * e2);
         if (!model.shape_functions_at(x, support, values)) continue;
         shaft_candidates_.push_back({x, support, values});
@@ -252,7 +253,7 @@ class KinematicNeedle final : public NeedleModel {
     if (punctured_ && from_reference_)
       axial = std::max(start_axial, coefficient_ * (advance - set.reference_axial[k]));
     double lateral_share = 1.0;
-    if (lateral_ == "path") lateral_share = std::max(0.0, 1.0 - since / lateral_ramp_);
+    if (return_to_path_) lateral_share = std::max(0.0, 1.0 - since / lateral_ramp_);
     return axial * path_.direction + lateral_share * start_lateral;
   }
 
@@ -316,7 +317,7 @@ class KinematicNeedle final : public NeedleModel {
   double coefficient_, puncture_strain_;
   std::optional<double> capture_radius_option_, strain_radius_option_;
   bool from_reference_;
-  std::string lateral_;  // "held", "path" or "free"
+  bool return_to_path_;  // lateral "path"; "free" only changes the constrained components
   bool shaft_surface_;
   double capture_radius_ = 0.0, strain_radius_ = 0.0, lateral_ramp_ = 0.0;
 
