@@ -79,27 +79,49 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
   }
 }
 
+Eigen::VectorXd ConstraintSystem::constrained_values(const Component& comp, int c, std::span<const double> v) {
+  Eigen::VectorXd out(static_cast<Eigen::Index>(comp.rows.size()));
+  for (Eigen::Index r = 0; r < out.size(); ++r) {
+    double sum = 0.0;
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
+      sum += it.value() * v[3 * static_cast<std::size_t>(it.col()) + c];
+    out[r] = sum;
+  }
+  return out;
+}
+
+void ConstraintSystem::add_correction(const Component& comp, int c, const Eigen::VectorXd& y,
+                                      std::span<double> v) const {
+  for (Eigen::Index r = 0; r < y.size(); ++r)
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
+      v[3 * static_cast<std::size_t>(it.col()) + c] += inverse_mass_[it.col()] * it.value() * y[r];
+}
+
 void ConstraintSystem::enforce(std::span<double> u, double alpha) {
   for (int c = 0; c < 3; ++c) {
     Component& comp = components_[c];
-    const auto m = static_cast<Eigen::Index>(comp.rows.size());
-    if (m == 0) continue;
-    for (Eigen::Index r = 0; r < m; ++r) {
-      double phi_u = 0.0;
-      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
-        phi_u += it.value() * u[3 * static_cast<std::size_t>(it.col()) + c];
+    if (comp.rows.empty()) continue;
+    const Eigen::VectorXd phi_u = constrained_values(comp, c, u);
+    for (Eigen::Index r = 0; r < phi_u.size(); ++r) {
       const auto& row = comp.rows[r];
-      comp.residual[r] = sets_[row.set]->values[row.entry][c] - phi_u;
+      comp.residual[r] = sets_[row.set]->values[row.entry][c] - phi_u[r];
     }
     comp.y = comp.factor.solve(comp.residual);
-    for (Eigen::Index r = 0; r < m; ++r) {
-      const double yr = comp.y[r];
-      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
-        u[3 * static_cast<std::size_t>(it.col()) + c] += inverse_mass_[it.col()] * it.value() * yr;
+    add_correction(comp, c, comp.y, u);
+    for (Eigen::Index r = 0; r < comp.y.size(); ++r) {
       const auto& row = comp.rows[r];
-      comp.lambda[r] = yr / alpha;
+      comp.lambda[r] = comp.y[r] / alpha;
       sets_[row.set]->reactions[row.entry][c] = comp.lambda[r];
     }
+  }
+}
+
+void ConstraintSystem::project_out(std::span<double> v) const {
+  for (int c = 0; c < 3; ++c) {
+    const Component& comp = components_[c];
+    if (comp.rows.empty()) continue;
+    const Eigen::VectorXd y = comp.factor.solve(-constrained_values(comp, c, v));
+    add_correction(comp, c, y, v);
   }
 }
 

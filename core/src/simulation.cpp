@@ -242,9 +242,11 @@ void Simulation::check_stable_step(double step_size) {
   // and the estimate then lands within a few percent of 2 / sqrt(spectral radius) on either side
   // (tests/solver/stable_step_test.cpp). A run is stopped only when its step exceeds the estimate by 5%, so a
   // run that would finish is not stopped; beyond that margin the central-difference update (and dynamic
-  // relaxation's, whose limit is the same as its damping vanishes) is unstable. Constraints are ignored, which
-  // can only raise lambda_max. The next check starts from this one's Ritz vector; the first, from a random
-  // vector, uses three times as many.
+  // relaxation's, whose limit is the same as its damping vanishes) is unstable. The iteration runs in the
+  // constrained subspace (every vector projected as the constraint correction projects each step's update,
+  // ConstraintSystem::project_out): a mode that the constraints hold still, such as the tissue between the
+  // driven points around a needle, cannot grow. The next check starts from this one's Ritz vector; the first,
+  // from a random vector, uses three times as many.
   const std::size_t dofs = u_.size();
   if (mode_.empty()) {
     // A fixed pseudo-random start (reproducible runs) with a component along every mode.
@@ -265,7 +267,9 @@ void Simulation::check_stable_step(double step_size) {
   Eigen::MatrixXd q(static_cast<Eigen::Index>(dofs), size);
   Eigen::VectorXd alpha(size), beta(size);
   Eigen::VectorXd w(static_cast<Eigen::Index>(dofs));
-  for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * mode_[d];
+  std::vector<double> increment(mode_);  // a displacement increment, projected into the constrained subspace
+  constraint_system_->project_out(increment);
+  for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
   if (!(w.norm() > 0.0)) return;
   q.col(0) = w / w.norm();
   int built = 0;
@@ -278,7 +282,10 @@ void Simulation::check_stable_step(double step_size) {
       perturbed[d] = u_[d] + epsilon * q(static_cast<Eigen::Index>(d), j) / root_mass[d];
     ++monitor_force_evaluations_;
     if (model_->internal_forces(perturbed, f1) >= 0) return;
-    for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = (f1[d] - f0[d]) / (epsilon * root_mass[d]);
+    // M^-1 K x, projected, then back to the symmetric form: w = M^1/2 P M^-1 K x.
+    for (std::size_t d = 0; d < dofs; ++d) increment[d] = (f1[d] - f0[d]) / (epsilon * mass_[d / 3]);
+    constraint_system_->project_out(increment);
+    for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
     alpha[j] = q.col(j).dot(w);
     built = j + 1;
     // Full reorthogonalisation, twice (the forward difference makes A slightly unsymmetric).

@@ -27,6 +27,10 @@ class ConstraintSystem {
   void enforce(std::span<double> u, double alpha);
   // f += Phi^T lambda: the nodal forces the constraints exerted in the last enforce().
   void add_constraint_forces(std::span<double> f) const;
+  // v -= M^-1 Phi^T (Phi M^-1 Phi^T)^-1 Phi v: the M-orthogonal projection onto the increments that leave every
+  // constrained value unchanged (the correction enforce() applies, for prescribed values held fixed). The
+  // constrained dynamics live in that subspace; the stable-step monitor iterates in it.
+  void project_out(std::span<double> v) const;
   Index constrained_count() const;
   long factorisations() const { return factorisations_; }
 
@@ -42,6 +46,9 @@ class ConstraintSystem {
     Eigen::VectorXd residual, y, lambda;
   };
   void rebuild(std::span<const double> mass);
+  // Phi_c v (one entry per row of component c) and v += M^-1 Phi_c^T y.
+  static Eigen::VectorXd constrained_values(const Component& comp, int c, std::span<const double> v);
+  void add_correction(const Component& comp, int c, const Eigen::VectorXd& y, std::span<double> v) const;
 
   const Model& model_;
   std::vector<NodalConstraints*> sets_;
