@@ -145,9 +145,7 @@ class KinematicNeedle final : public NeedleModel {
     }
     captured_.assign(static_cast<std::size_t>(model.node_count()), 0);
 
-    // Integration points near the entry that the puncture test watches during indentation.
-    for (Index ip = 0; ip < model.integration_point_count(); ++ip)
-      if ((model.ip_positions()[ip] - path_.entry).norm() <= strain_radius_ + path_.depth) watched_.push_back(ip);
+    tip_strain_.setup(path_, model, strain_radius_);
 
     for (Index n : footprint_) {
       captured_[n] = 1;
@@ -166,7 +164,7 @@ class KinematicNeedle final : public NeedleModel {
     const double advance = load.load_fraction * path_.depth;
     if (punctured_) {
       capture_passed(model, u, advance);
-    } else if (largest_strain_near_tip(model, u, advance) > puncture_strain_) {
+    } else if (tip_strain_.largest(model, u, path_.tip(advance)) > puncture_strain_) {
       punctured_ = true;
       puncture_depth_ = depth_;
       log().info("kinematic needle: puncture at depth {:.4g} mm", 1e3 * puncture_depth_);
@@ -293,19 +291,6 @@ class KinematicNeedle final : public NeedleModel {
     }
   }
 
-  double largest_strain_near_tip(const Model& model, std::span<const double> u, double advance) const {
-    const Vec3 tip = path_.tip(advance);
-    double largest = 0.0;
-    for (Index ip : watched_) {
-      if ((model.ip_positions()[ip] - tip).norm() > strain_radius_) continue;
-      const Mat3 F = model.deformation_gradient(ip, u);
-      const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
-      const Eigen::SelfAdjointEigenSolver<Mat3> eigen(E, Eigen::EigenvaluesOnly);
-      largest = std::max(largest, eigen.eigenvalues().cwiseAbs().maxCoeff());
-    }
-    return largest;
-  }
-
   struct ShaftPoint {
     Vec3 position;  // reference
     std::vector<Index> support;
@@ -321,7 +306,8 @@ class KinematicNeedle final : public NeedleModel {
   bool shaft_surface_;
   double capture_radius_ = 0.0, strain_radius_ = 0.0, lateral_ramp_ = 0.0;
 
-  std::vector<Index> footprint_, candidates_, watched_;
+  std::vector<Index> footprint_, candidates_;
+  TipStrainWatch tip_strain_;
   std::vector<ShaftPoint> shaft_candidates_;  // ordered along the path
   int rings_ = 0;
   std::vector<char> captured_;

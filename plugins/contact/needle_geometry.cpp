@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
+
 namespace mtled {
 
 void declare_needle_path(ComponentDeclaration& d) {
@@ -65,6 +67,25 @@ void check_needle_enters_body(const NeedlePath& path, const Model& model, const 
                      fmt::format("the needle path from the entry along ({:.3g}, {:.3g}, {:.3g}) meets no node of the "
                                  "body within the depth of {:.3g} mm: does the direction point into the body?",
                                  path.direction[0], path.direction[1], path.direction[2], 1e3 * path.depth));
+}
+
+void TipStrainWatch::setup(const NeedlePath& path, const Model& model, double radius) {
+  radius_ = radius;
+  watched_.clear();
+  for (Index ip = 0; ip < model.integration_point_count(); ++ip)
+    if ((model.ip_positions()[ip] - path.entry).norm() <= radius + path.depth) watched_.push_back(ip);
+}
+
+double TipStrainWatch::largest(const Model& model, std::span<const double> u, const Vec3& tip) const {
+  double largest = 0.0;
+  for (Index ip : watched_) {
+    if ((model.ip_positions()[ip] - tip).norm() > radius_) continue;
+    const Mat3 F = model.deformation_gradient(ip, u);
+    const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
+    const Eigen::SelfAdjointEigenSolver<Mat3> eigen(E, Eigen::EigenvaluesOnly);
+    largest = std::max(largest, eigen.eigenvalues().cwiseAbs().maxCoeff());
+  }
+  return largest;
 }
 
 }  // namespace mtled

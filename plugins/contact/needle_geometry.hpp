@@ -1,6 +1,7 @@
 #pragma once
 // What every needle model shares: the straight needle's parameters and path, checks that it enters the
 // body, and the nodes along its path.
+#include <span>
 #include <vector>
 
 #include "mtled/interfaces/driver.hpp"
@@ -30,5 +31,18 @@ void check_needle_enters_body(const NeedlePath& path, const Model& model, const 
 
 // Mean edge length of the surface nodes nearest the entry: the local node spacing where the needle enters.
 double spacing_at_entry(const NeedlePath& path, const Model& model);
+
+// The puncture test both needle models share: the largest principal Green strain (in absolute value) at the
+// integration points within `radius` of the tip.
+class TipStrainWatch {
+ public:
+  // Keeps the integration points that a tip anywhere along the path can come within `radius` of.
+  void setup(const NeedlePath& path, const Model& model, double radius);
+  double largest(const Model& model, std::span<const double> u, const Vec3& tip) const;
+
+ private:
+  std::vector<Index> watched_;
+  double radius_ = 0.0;
+};
 
 }  // namespace mtled

@@ -204,8 +204,7 @@ class RigidContactNeedle final : public NeedleModel {
     in_contact_.assign(static_cast<std::size_t>(model.node_count()), 0);
     released_before_.assign(static_cast<std::size_t>(model.node_count()), 0);
 
-    for (Index ip = 0; ip < model.integration_point_count(); ++ip)
-      if ((model.ip_positions()[ip] - path_.entry).norm() <= strain_radius_ + path_.depth) watched_.push_back(ip);
+    tip_strain_.setup(path_, model, strain_radius_);
 
     for (Index n : footprint) catch_node(model, n, model.nodes()[n], 0.0, true);
     set_values(model);
@@ -409,20 +408,7 @@ class RigidContactNeedle final : public NeedleModel {
       smoothed_force_ += 0.1 * (axial_force() - smoothed_force_);
       return smoothed_force_ > *puncture_force_;
     }
-    return largest_strain_near_tip(model, u) > puncture_strain_;
-  }
-
-  double largest_strain_near_tip(const Model& model, std::span<const double> u) const {
-    const Vec3 tip = path_.tip(depth_);
-    double largest = 0.0;
-    for (Index ip : watched_) {
-      if ((model.ip_positions()[ip] - tip).norm() > strain_radius_) continue;
-      const Mat3 F = model.deformation_gradient(ip, u);
-      const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
-      const Eigen::SelfAdjointEigenSolver<Mat3> eigen(E, Eigen::EigenvaluesOnly);
-      largest = std::max(largest, eigen.eigenvalues().cwiseAbs().maxCoeff());
-    }
-    return largest;
+    return tip_strain_.largest(model, u, path_.tip(depth_)) > puncture_strain_;
   }
 
   // Catches the candidate nodes the tip has passed that lie inside the needle's volume, or (after puncture)
@@ -501,7 +487,8 @@ class RigidContactNeedle final : public NeedleModel {
 
   std::vector<double> node_stiffness_, node_mass_;
   double step_ = 0.0;
-  std::vector<Index> candidates_, watched_;
+  std::vector<Index> candidates_;
+  TipStrainWatch tip_strain_;
   std::vector<char> in_contact_, released_before_;
   std::vector<Contact> contacts_;
   NodalConstraints contact_;

@@ -31,15 +31,7 @@ json needle_block(double mu) {
           {"friction_coefficient", mu}};
 }
 
-json scene_json(const json& needle) {
-  return {{"mesh", {{"type", "cylinder"}, {"radius", 0.006}, {"height", kHeight}, {"target_nodes", 600}}},
-          {"shape_function", {{"type", "mmls"}}},
-          {"materials", {{{"type", "ogden"}, {"mu", 722}, {"alpha", -1.3}, {"D", 5.57738e-5}, {"density", 1000}}}},
-          {"boundaries", {{{"type", "fixed"}, {"name", "bottom"}, {"nodes", {{"group", "bottom"}}}}}},
-          {"needle", needle},
-          {"integrator",
-           {{"type", "dynamic_relaxation"}, {"load_steps", 300}, {"load_curve", "linear"}, {"tolerance", 1e-3}}}};
-}
+json scene_json(const json& needle) { return test::gel_cylinder_scene(kHeight, needle); }
 
 Scene make_scene(const json& scene) {
   return validate_scene(parse_scene(scene.dump(), "contact_test.json"), test::catalog());

@@ -23,13 +23,7 @@ json scene_json(const json& needle_options, const json& direction = {0, 0, -1}) 
   json needle = {{"type", "kinematic"},  {"diameter", 1.6e-3},        {"entry", {0.0, 0.0, kHeight}},
                  {"direction", direction}, {"depth", kDepth}, {"deformation_coefficient", kCoefficient}};
   needle.update(needle_options);
-  return {{"mesh", {{"type", "cylinder"}, {"radius", 0.006}, {"height", kHeight}, {"target_nodes", 600}}},
-          {"shape_function", {{"type", "mmls"}}},
-          {"materials", {{{"type", "ogden"}, {"mu", 722}, {"alpha", -1.3}, {"D", 5.57738e-5}, {"density", 1000}}}},
-          {"boundaries", {{{"type", "fixed"}, {"name", "bottom"}, {"nodes", {{"group", "bottom"}}}}}},
-          {"needle", needle},
-          {"integrator",
-           {{"type", "dynamic_relaxation"}, {"load_steps", 300}, {"load_curve", "linear"}, {"tolerance", 1e-3}}}};
+  return test::gel_cylinder_scene(kHeight, needle);
 }
 
 struct Driven {

@@ -97,6 +97,16 @@ TetMesh box_mesh(Vec3 size, int nx, int ny, int nz, double jitter, unsigned seed
   return mesh;
 }
 
+json gel_cylinder_scene(double height, const json& needle) {
+  return {{"mesh", {{"type", "cylinder"}, {"radius", 0.006}, {"height", height}, {"target_nodes", 600}}},
+          {"shape_function", {{"type", "mmls"}}},
+          {"materials", {{{"type", "ogden"}, {"mu", 722}, {"alpha", -1.3}, {"D", 5.57738e-5}, {"density", 1000}}}},
+          {"boundaries", {{{"type", "fixed"}, {"name", "bottom"}, {"nodes", {{"group", "bottom"}}}}}},
+          {"needle", needle},
+          {"integrator",
+           {{"type", "dynamic_relaxation"}, {"load_steps", 300}, {"load_curve", "linear"}, {"tolerance", 1e-3}}}};
+}
+
 CommandResult run_mtled(const std::vector<std::string>& arguments, const std::vector<std::string>& environment) {
   auto quote = [](const std::string& s) {
     std::string q = "'";

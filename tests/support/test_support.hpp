@@ -50,6 +50,11 @@ class OneThread {
 // the faces.
 TetMesh box_mesh(Vec3 size, int nx, int ny, int nz, double jitter = 0.0, unsigned seed = 1);
 
+// A small cylinder of the paper's gel for the needle models' tests: r = 6 mm, height `height`, about 600
+// nodes (spacing 1.3 mm), Ogden mu = 722 Pa, alpha = -1.3, bottom fixed, MMLS, dynamic relaxation over 300
+// linear load steps to a tolerance of 1e-3; `needle` is the scene's needle block.
+json gel_cylinder_scene(double height, const json& needle);
+
 struct CommandResult {
   int exit_code = -1;
   std::string output;  // stdout and stderr together
