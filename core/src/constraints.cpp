@@ -79,15 +79,14 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
   }
 }
 
-Eigen::VectorXd ConstraintSystem::constrained_values(const Component& comp, int c, std::span<const double> v) {
-  Eigen::VectorXd out(static_cast<Eigen::Index>(comp.rows.size()));
+void ConstraintSystem::constrained_values(const Component& comp, int c, std::span<const double> v,
+                                          Eigen::VectorXd& out) {
   for (Eigen::Index r = 0; r < out.size(); ++r) {
     double sum = 0.0;
     for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
       sum += it.value() * v[3 * static_cast<std::size_t>(it.col()) + c];
     out[r] = sum;
   }
-  return out;
 }
 
 void ConstraintSystem::add_correction(const Component& comp, int c, const Eigen::VectorXd& y,
@@ -101,10 +100,10 @@ void ConstraintSystem::enforce(std::span<double> u, double alpha) {
   for (int c = 0; c < 3; ++c) {
     Component& comp = components_[c];
     if (comp.rows.empty()) continue;
-    const Eigen::VectorXd phi_u = constrained_values(comp, c, u);
-    for (Eigen::Index r = 0; r < phi_u.size(); ++r) {
+    constrained_values(comp, c, u, comp.residual);  // in place: no allocation in the time step
+    for (Eigen::Index r = 0; r < comp.residual.size(); ++r) {
       const auto& row = comp.rows[r];
-      comp.residual[r] = sets_[row.set]->values[row.entry][c] - phi_u[r];
+      comp.residual[r] = sets_[row.set]->values[row.entry][c] - comp.residual[r];
     }
     comp.y = comp.factor.solve(comp.residual);
     add_correction(comp, c, comp.y, u);
@@ -120,7 +119,9 @@ void ConstraintSystem::project_out(std::span<double> v) const {
   for (int c = 0; c < 3; ++c) {
     const Component& comp = components_[c];
     if (comp.rows.empty()) continue;
-    const Eigen::VectorXd y = comp.factor.solve(-constrained_values(comp, c, v));
+    Eigen::VectorXd phi_v(comp.residual.size());
+    constrained_values(comp, c, v, phi_v);
+    const Eigen::VectorXd y = comp.factor.solve(-phi_v);
     add_correction(comp, c, y, v);
   }
 }

@@ -46,8 +46,8 @@ class ConstraintSystem {
     Eigen::VectorXd residual, y, lambda;
   };
   void rebuild(std::span<const double> mass);
-  // Phi_c v (one entry per row of component c) and v += M^-1 Phi_c^T y.
-  static Eigen::VectorXd constrained_values(const Component& comp, int c, std::span<const double> v);
+  // out = Phi_c v (one entry per row of component c; out is sized already) and v += M^-1 Phi_c^T y.
+  static void constrained_values(const Component& comp, int c, std::span<const double> v, Eigen::VectorXd& out);
   void add_correction(const Component& comp, int c, const Eigen::VectorXd& y, std::span<double> v) const;
 
   const Model& model_;
