@@ -13,10 +13,13 @@ Progress::Progress(bool enabled)
 
 Progress::~Progress() { finish(); }
 
-void Progress::update(double fraction, const std::string& text) {
+bool Progress::due() const {
+  return enabled_ && (!drawn_ || std::chrono::steady_clock::now() - last_ >= std::chrono::milliseconds(250));
+}
+
+void Progress::draw(double fraction, const std::string& text) {
   if (!enabled_) return;
   const auto now = std::chrono::steady_clock::now();
-  if (drawn_ && now - last_ < std::chrono::milliseconds(250)) return;
   last_ = now;
   drawn_ = true;
   const double elapsed = std::chrono::duration<double>(now - start_).count();

@@ -10,7 +10,9 @@ class Progress {
  public:
   explicit Progress(bool enabled);
   ~Progress();
-  void update(double fraction, const std::string& text);
+  // Whether a redraw is due: callers build the text only then (not at every step).
+  bool due() const;
+  void draw(double fraction, const std::string& text);
   void finish();
 
  private:

@@ -102,11 +102,7 @@ class RunObserver final : public StepObserver {
     const long step = simulation.step();
     if (step % history_every_ == 0) record(simulation);
     if (snapshot_every_ > 0 && step % snapshot_every_ == 0 && step > 0) snapshot(simulation);
-    std::string text = fmt::format("step {}  t {:.4g} s", step, simulation.time());
-    if (const auto* needle = simulation.needle())
-      text += fmt::format("  depth {:.2f} mm  force {:.4g} N  {}", 1e3 * needle->status().depth,
-                          needle->status().force, needle->status().phase);
-    progress_.update(simulation.load_fraction(), text);
+    if (progress_.due()) progress_.draw(simulation.load_fraction(), progress_text(simulation));
   }
 
   void finish(const Simulation& simulation) {
@@ -125,6 +121,21 @@ class RunObserver final : public StepObserver {
   }
 
  private:
+  static std::string progress_text(const Simulation& simulation) {
+    std::string text = fmt::format("step {}  t {:.4g} s", simulation.step(), simulation.time());
+    if (const auto* needle = simulation.needle())
+      text += fmt::format("  depth {:.2f} mm  force {:.4g} N  {}", 1e3 * needle->status().depth,
+                          needle->status().force, needle->status().phase);
+    // Once the load is on, a relaxation is most of a run: show how far it still has to go.
+    if (simulation.load_fraction() >= 1.0) {
+      const json report = simulation.integrator().report();
+      if (report.contains("relative_error_bound") && report.contains("tolerance"))
+        text += fmt::format("  relaxing: error {:.2g} (tolerance {:.2g})", report["relative_error_bound"].get<double>(),
+                            report["tolerance"].get<double>());
+    }
+    return text;
+  }
+
   void record(const Simulation& simulation) {
     last_recorded_ = simulation.step();
     if (needle_.is_open()) {

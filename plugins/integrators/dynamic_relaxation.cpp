@@ -14,6 +14,7 @@
 
 #include "explicit_update.hpp"
 #include "mtled/load_curve.hpp"
+#include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
 #include "mtled/simulation.hpp"
 
@@ -93,6 +94,12 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     simulation.complete_step(u_next_, static_cast<double>(n + 1) * h_, fraction, alpha_);
 
     if (n + 1 >= load_steps_) check_convergence(simulation);
+    // A long relaxation shows nothing else while it runs (--log-level debug).
+    if ((n + 1) % 500 == 0)
+      log().debug("dynamic relaxation step {}: lowest frequency {:.4g} rad/s, rate {:.6f}, error bound {:.3g} m ({:.3g} "
+                  "of the largest displacement)",
+                  n + 1, omega_min_, rho_, error_bound_,
+                  largest_displacement_ > 0 ? error_bound_ / largest_displacement_ : INFINITY);
     if (!converged_ && simulation.step() >= max_steps_) {
       Diagnostic d;
       d.step = simulation.step();
