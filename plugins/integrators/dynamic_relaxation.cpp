@@ -98,8 +98,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     if ((n + 1) % 500 == 0)
       log().debug("dynamic relaxation step {}: lowest frequency {:.4g} rad/s, rate {:.6f}, error bound {:.3g} m ({:.3g} "
                   "of the largest displacement)",
-                  n + 1, omega_min_, rho_, error_bound_,
-                  largest_displacement_ > 0 ? error_bound_ / largest_displacement_ : INFINITY);
+                  n + 1, omega_min_, rho_, error_bound_, relative_error_bound());
     if (!converged_ && simulation.step() >= max_steps_) {
       Diagnostic d;
       d.step = simulation.step();
@@ -129,13 +128,18 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
             {"load_steps", load_steps_},
             {"converged", converged_},
             {"error_bound_m", error_bound_},
-            {"relative_error_bound", largest_displacement_ > 0 ? error_bound_ / largest_displacement_ : 0.0},
+            {"relative_error_bound", relative_error_bound()},
             {"tolerance", tolerance_},
             {"lowest_frequency_rad_per_s", omega_min_},
             {"convergence_rate", rho_}};
   }
 
  private:
+  // The error bound as a fraction of the largest displacement (0 before there is any displacement).
+  double relative_error_bound() const {
+    return largest_displacement_ > 0 ? error_bound_ / largest_displacement_ : 0.0;
+  }
+
   void set_frequency(double omega) {
     omega_min_ = omega;
     const double k = std::max(2.0 / (h_ * omega), 1.0 + 1e-12);
