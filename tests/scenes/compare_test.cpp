@@ -1,6 +1,7 @@
 // mtled compare end to end: a run against itself, exactly affine fields on different node clouds (where MLS
-// interpolation with a linear basis is exact), a known scaling whose NRMSE is worked out here from the
-// reference run's nodes, the histogram SVG, and bad paths (exit 2 naming the path).
+// interpolation with a linear basis is exact), a known scaling whose NRMSE and difference percentiles are
+// worked out here from the reference run's nodes, the histogram SVG, and bad paths (exit 2 naming the path).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -126,6 +127,26 @@ TEST(Compare, AKnownScalingGivesTheNrmseWorkedOutByHand) {
       EXPECT_NEAR(report["nrmse_paper_formula"][name].get<double>(),
                   expected[k] / std::sqrt(static_cast<double>(field.points.size())), 1e-9 * expected[k]);
       ++k;
+    }
+    // Each reported percentile q of |u_A - u_B| = |d + G X| is a quantile by definition: at least p% of
+    // B's nodes at or under it, fewer than p% strictly under it (with a round-off margin of 1e-12 m).
+    const double n = static_cast<double>(field.points.size());
+    for (const int percent : {50, 90, 99}) {
+      const json& row = report["abs_difference_quantiles_m"][fmt::format("p{}", percent)];
+      int column = 0;
+      for (const char* name : {"ux", "uy", "uz", "magnitude"}) {
+        const double q = row[name].get<double>();
+        double at_or_under = 0, under = 0;
+        for (const Vec3& X : field.points) {
+          const Vec3 u = kD + kG * X;
+          const double value = column < 3 ? std::abs(u[column]) : u.norm();
+          at_or_under += value <= q + 1e-12;
+          under += value < q - 1e-12;
+        }
+        EXPECT_GE(at_or_under, percent * n / 100) << name << " p" << percent << " from " << a;
+        EXPECT_LT(under, percent * n / 100) << name << " p" << percent << " from " << a;
+        ++column;
+      }
     }
   }
 }

@@ -39,6 +39,7 @@ Comparison compare_runs(const std::filesystem::path& a, const std::filesystem::p
 std::filesystem::path result_file_of(const std::filesystem::path& run);
 
 // What `mtled compare --json` prints: nrmse, rmse_m, max_abs_difference_m, range_m (each {ux, uy, uz}),
+// abs_difference_quantiles_m (p50, p90, p99 of |u_A - u_B|, nearest rank, each {ux, uy, uz, magnitude}),
 // nrmse_paper_formula, definition, nodes {a, b, compared}, interpolated, interpolation, run_a, run_b.
 json comparison_json(const Comparison& comparison);
 
