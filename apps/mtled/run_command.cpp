@@ -125,7 +125,7 @@ class RunObserver final : public StepObserver {
     std::string text = fmt::format("step {}  t {:.4g} s", simulation.step(), simulation.time());
     if (const auto* needle = simulation.needle())
       text += fmt::format("  depth {:.2f} mm  force {:.4g} N  {}", 1e3 * needle->status().depth,
-                          needle->status().force, needle->status().phase);
+                          needle->status().force, to_string(needle->status().phase));
     // Once the load is on, a relaxation is most of a run: show how far it still has to go.
     if (simulation.load_fraction() >= 1.0) {
       const json report = simulation.integrator().report();
@@ -140,7 +140,7 @@ class RunObserver final : public StepObserver {
     last_recorded_ = simulation.step();
     if (needle_.is_open()) {
       const NeedleStatus s = simulation.needle()->status();
-      needle_.out() << fmt::format("{:.10g},{:.10g},{:.10g},{}\n", simulation.time(), s.depth, s.force, s.phase);
+      needle_.out() << fmt::format("{:.10g},{:.10g},{:.10g},{}\n", simulation.time(), s.depth, s.force, to_string(s.phase));
     }
     if (reactions_.is_open()) {
       for (const auto* set : simulation.constraint_sets()) {
@@ -339,7 +339,7 @@ int run_scene(const RunOptions& options) {
     summary["needle"] = {{"final_depth_m", s.depth},
                          {"final_force_N", s.force},
                          {"puncture_depth_m", s.puncture_depth >= 0 ? json(s.puncture_depth) : json(nullptr)},
-                         {"phase", s.phase},
+                         {"phase", to_string(s.phase)},
                          {"driven_nodes", s.driven_nodes}};
   }
   json reactions = json::object();

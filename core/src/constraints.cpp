@@ -10,11 +10,11 @@ void ConstraintSystem::update(const std::vector<NodalConstraints*>& sets, std::s
                               bool mass_changed) {
   bool changed = mass_changed || sets.size() != sets_.size();
   for (std::size_t s = 0; s < sets.size() && !changed; ++s)
-    changed = sets[s] != sets_[s] || sets[s]->revision != revisions_[s];
+    changed = sets[s] != sets_[s] || sets[s]->revision() != revisions_[s];
   if (!changed) return;
   sets_ = sets;
   revisions_.clear();
-  for (const auto* set : sets_) revisions_.push_back(set->revision);
+  for (const auto* set : sets_) revisions_.push_back(set->revision());
   rebuild(mass);
 }
 
@@ -32,13 +32,13 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
     for (std::size_t s = 0; s < sets_.size(); ++s) {
       NodalConstraints& set = *sets_[s];
       set.reactions.assign(set.size(), Vec3::Zero());
-      if (set.values.size() != set.size() || (!set.points.empty() && !set.nodes.empty()))
+      if (set.values.size() != set.size() || (!set.points().empty() && !set.nodes().empty()))
         throw std::logic_error(fmt::format("constraint set \"{}\": {} values for {} nodes and {} points", set.name,
-                                           set.values.size(), set.nodes.size(), set.points.size()));
-      if (!set.components[c]) continue;
+                                           set.values.size(), set.nodes().size(), set.points().size()));
+      if (!set.components()[c]) continue;
       // Material points never coincide with one another's rows by construction; nodes may be claimed twice.
       for (std::size_t k = 0; k < set.size(); ++k)
-        if (!set.points.empty() || claimed.insert(set.nodes[k]).second) comp.rows.push_back({s, k});
+        if (!set.points().empty() || claimed.insert(set.nodes()[k]).second) comp.rows.push_back({s, k});
     }
     const auto m = static_cast<Eigen::Index>(comp.rows.size());
     std::vector<Eigen::Triplet<double>> triplets;
@@ -46,15 +46,15 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
     std::vector<double> values;
     for (Eigen::Index r = 0; r < m; ++r) {
       const NodalConstraints& set = *sets_[comp.rows[r].set];
-      if (!set.points.empty()) {
-        const Vec3& x = set.points[comp.rows[r].entry];
+      if (!set.points().empty()) {
+        const Vec3& x = set.points()[comp.rows[r].entry];
         if (!model_.shape_functions_at(x, support, values))
           throw std::logic_error(fmt::format("constraint set \"{}\": no shape functions at ({:g}, {:g}, {:g})",
                                              set.name, x[0], x[1], x[2]));
         for (std::size_t k = 0; k < support.size(); ++k) triplets.emplace_back(r, support[k], values[k]);
         continue;
       }
-      const Index node = set.nodes[comp.rows[r].entry];
+      const Index node = set.nodes()[comp.rows[r].entry];
       for (std::int64_t k = psi.offsets[node]; k < psi.offsets[node + 1]; ++k)
         triplets.emplace_back(r, psi.nodes[k], psi.values[k]);
     }

@@ -13,12 +13,62 @@ BoundaryCondition::~BoundaryCondition() = default;
 NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
 
-void Driver::add_forces(const LoadState&, const Model&, std::span<const double>, std::span<double>) {}
+std::string_view to_string(NeedlePhase phase) {
+  return phase == NeedlePhase::penetration ? "penetration" : "indentation";
+}
 
 Vec3 NodalConstraints::total_reaction() const {
   Vec3 sum = Vec3::Zero();
   for (const auto& r : reactions) sum += r;
   return sum;
+}
+
+void NodalConstraints::set_components(const std::array<bool, 3>& components) {
+  components_ = components;
+  ++revision_;
+}
+
+void NodalConstraints::assign_nodes(std::vector<Index> nodes, const Vec3& value) {
+  nodes_ = std::move(nodes);
+  points_.clear();
+  values.assign(nodes_.size(), value);
+  ++revision_;
+}
+
+void NodalConstraints::add_node(Index node, const Vec3& value) {
+  nodes_.push_back(node);
+  values.push_back(value);
+  ++revision_;
+}
+
+void NodalConstraints::add_point(const Vec3& point, const Vec3& value) {
+  points_.push_back(point);
+  values.push_back(value);
+  ++revision_;
+}
+
+void NodalConstraints::keep_entries(const std::vector<char>& keep) {
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    if (!keep[k]) continue;
+    if (!nodes_.empty()) nodes_[kept] = nodes_[k];
+    if (!points_.empty()) points_[kept] = points_[k];
+    if (k < values.size()) values[kept] = values[k];
+    if (k < reactions.size()) reactions[kept] = reactions[k];
+    ++kept;
+  }
+  if (!nodes_.empty()) nodes_.resize(kept);
+  if (!points_.empty()) points_.resize(kept);
+  values.resize(std::min(values.size(), kept));
+  reactions.resize(std::min(reactions.size(), kept));
+  ++revision_;
+}
+
+void NodalConstraints::clear() {
+  nodes_.clear();
+  points_.clear();
+  values.clear();
+  ++revision_;
 }
 
 std::vector<ParameterSpec> common_parameters(Category category) {

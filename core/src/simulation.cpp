@@ -123,7 +123,7 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   }
   for (Driver* driver : drivers_) {
     for (NodalConstraints* set : driver->constraints()) constraint_sets_.push_back(set);
-    force_drivers_ += driver->applies_forces() ? 1 : 0;
+    for (NodalForces* set : driver->forces()) force_sets_.push_back(set);
   }
   for (std::size_t a = 0; a < constraint_sets_.size(); ++a)
     for (std::size_t b = 0; b < a; ++b)
@@ -193,8 +193,9 @@ void Simulation::internal_forces(std::span<const double> u, std::span<double> f)
 
 void Simulation::external_forces(std::span<double> f) {
   std::fill(f.begin(), f.end(), 0.0);
-  for (Driver* driver : drivers_)
-    if (driver->applies_forces()) driver->add_forces(load_, *model_, u_, f);
+  for (const NodalForces* set : force_sets_)
+    for (std::size_t k = 0; k < set->nodes.size(); ++k)
+      for (int c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(set->nodes[k]) + c] += set->values[k][c];
 }
 
 void Simulation::update_drivers() {
@@ -355,7 +356,7 @@ void Simulation::check_energy(std::span<const double> u_new, double step_size) {
     const std::size_t n = std::min({previous_values_[s].size(), set.values.size(), set.reactions.size()});
     for (std::size_t k = 0; k < n; ++k)
       for (int c = 0; c < 3; ++c)
-        if (set.components[c]) work_bound_ += std::abs(set.reactions[k][c] * (set.values[k][c] - previous_values_[s][k][c]));
+        if (set.components()[c]) work_bound_ += std::abs(set.reactions[k][c] * (set.values[k][c] - previous_values_[s][k][c]));
   }
   // The projection onto the constraints also changes the velocities it touches: the kinetic energy it adds is
   // work the prescribed motion does on the nodes it drives directly. Only additions count: the energy it takes
@@ -369,7 +370,7 @@ void Simulation::check_energy(std::span<const double> u_new, double step_size) {
     work_bound_ += 0.5 * added / (step_size * step_size);
   }
   // External force drivers would need their own work; none of the shipped plugins has one.
-  if (force_drivers_ > 0 || !(step_size > 0.0) || !(previous_step_size_ > 0.0)) return;
+  if (!force_sets_.empty() || !(step_size > 0.0) || !(previous_step_size_ > 0.0)) return;
   // The kinetic energy central differences conserve: 1/2 v(n-1/2) M v(n+1/2), the product of the two half-step
   // velocities around step n. (The square of one half-step velocity overstates the energy of modes near the
   // stability limit by 1 / (1 - (h omega / 2)^2), which would flag stable runs at large time-step factors.)

@@ -25,8 +25,9 @@ NodeSetBoundary::NodeSetBoundary(const Parameters& parameters, Vec3 final_displa
   const auto components = parameters.string_list("components");
   if (components.empty())
     throw InputError(parameters.pointer("components"), "give at least one of \"x\", \"y\", \"z\"");
-  set_.components = {false, false, false};
-  for (const auto& c : components) set_.components[static_cast<std::size_t>(c[0] - 'x')] = true;
+  std::array<bool, 3> constrained{false, false, false};
+  for (const auto& c : components) constrained[static_cast<std::size_t>(c[0] - 'x')] = true;
+  set_.set_components(constrained);
   if (const auto name = parameters.optional_string("name")) {
     set_.name = *name;
   } else if (selector_.kind == NodeSelector::Kind::group) {
@@ -37,15 +38,14 @@ NodeSetBoundary::NodeSetBoundary(const Parameters& parameters, Vec3 final_displa
 }
 
 void NodeSetBoundary::setup(const Model& model) {
-  set_.nodes = select_nodes(selector_, model.mesh(), model.surface(), parameters_.pointer("nodes"));
-  if (set_.nodes.empty())
+  std::vector<Index> nodes = select_nodes(selector_, model.mesh(), model.surface(), parameters_.pointer("nodes"));
+  if (nodes.empty())
     throw InputError(parameters_.pointer("nodes"),
                      fmt::format("selects no node of the mesh ({}): check the coordinates (in m) and the tolerance",
                                  selector_.describe()));
-  set_.values.assign(set_.nodes.size(), Vec3::Zero());
-  for (Index n : set_.nodes) positions_.push_back(model.nodes()[n]);
-  ++set_.revision;
-  log().info("boundary \"{}\": {} nodes ({})", set_.name, set_.nodes.size(), selector_.describe());
+  for (Index n : nodes) positions_.push_back(model.nodes()[n]);
+  set_.assign_nodes(std::move(nodes), Vec3::Zero());
+  log().info("boundary \"{}\": {} nodes ({})", set_.name, set_.size(), selector_.describe());
 }
 
 void NodeSetBoundary::update(const LoadState& load, const Model&, std::span<const double>) {

@@ -102,7 +102,8 @@ class KinematicNeedle final : public NeedleModel {
                                      "x, y or z; got ({:g}, {:g}, {:g}). Use \"held\" or \"path\", or rotate the "
                                      "scene so that the needle runs along a coordinate axis",
                                      path_.direction.x(), path_.direction.y(), path_.direction.z()));
-      nodes_.constraints.components = shaft_.constraints.components = {axis == 0, axis == 1, axis == 2};
+      nodes_.constraints.set_components({axis == 0, axis == 1, axis == 2});
+      shaft_.constraints.set_components({axis == 0, axis == 1, axis == 2});
     }
   }
 
@@ -149,8 +150,7 @@ class KinematicNeedle final : public NeedleModel {
 
     for (Index n : footprint_) {
       captured_[n] = 1;
-      nodes_.constraints.nodes.push_back(n);
-      nodes_.add(path_.axial(model.nodes()[n]), Vec3::Zero(), 0.0);
+      nodes_.add_node(n, path_.axial(model.nodes()[n]), Vec3::Zero(), 0.0);
     }
     if (shaft_surface_)
       log().info("kinematic needle: footprint {} nodes, {} points on the shaft's surface in {} rings, C_D = {:g}",
@@ -187,7 +187,7 @@ class KinematicNeedle final : public NeedleModel {
     for (const DrivenSet* set : {&nodes_, &shaft_})
       for (const auto& r : set->constraints.reactions) force += r.dot(path_.direction);
     s.force = force;
-    s.phase = punctured_ ? "penetration" : "indentation";
+    s.phase = punctured_ ? NeedlePhase::penetration : NeedlePhase::indentation;
     s.puncture_depth = punctured_ ? puncture_depth_ : -1.0;
     s.driven_nodes = static_cast<Index>(nodes_.constraints.size() + shaft_.constraints.size());
     return s;
@@ -201,22 +201,26 @@ class KinematicNeedle final : public NeedleModel {
     std::vector<double> capture_depth;    // needle advance when the current driving began
     std::vector<double> reference_axial;  // axial coordinate of the entry's reference position
 
-    // The caller has appended the node or point itself.
-    void add(double reference, const Vec3& displacement, double advance) {
-      constraints.values.push_back(displacement);
-      captured_at.push_back(displacement);
-      capture_depth.push_back(advance);
-      reference_axial.push_back(reference);
-      ++constraints.revision;
+    void add_node(Index node, double reference, const Vec3& displacement, double advance) {
+      constraints.add_node(node, displacement);
+      remember(reference, displacement, advance);
+    }
+    void add_point(const Vec3& point, double reference, const Vec3& displacement, double advance) {
+      constraints.add_point(point, displacement);
+      remember(reference, displacement, advance);
     }
     void clear() {
-      constraints.nodes.clear();
-      constraints.points.clear();
-      constraints.values.clear();
+      constraints.clear();
       captured_at.clear();
       capture_depth.clear();
       reference_axial.clear();
-      ++constraints.revision;
+    }
+
+   private:
+    void remember(double reference, const Vec3& displacement, double advance) {
+      captured_at.push_back(displacement);
+      capture_depth.push_back(advance);
+      reference_axial.push_back(reference);
     }
   };
 
@@ -277,8 +281,7 @@ class KinematicNeedle final : public NeedleModel {
       const Vec3 displacement = model.interpolate_node(n, u);
       if (!passed(model.nodes()[n], displacement)) break;
       captured_[n] = 1;
-      nodes_.constraints.nodes.push_back(n);
-      nodes_.add(path_.axial(model.nodes()[n]), displacement, advance);
+      nodes_.add_node(n, path_.axial(model.nodes()[n]), displacement, advance);
     }
     for (; next_point_ < shaft_candidates_.size(); ++next_point_) {
       const ShaftPoint& point = shaft_candidates_[next_point_];
@@ -286,8 +289,7 @@ class KinematicNeedle final : public NeedleModel {
       for (std::size_t k = 0; k < point.support.size(); ++k)
         displacement += point.values[k] * Vec3(&u[3 * static_cast<std::size_t>(point.support[k])]);
       if (!passed(point.position, displacement)) break;
-      shaft_.constraints.points.push_back(point.position);
-      shaft_.add(path_.axial(point.position), displacement, advance);
+      shaft_.add_point(point.position, path_.axial(point.position), displacement, advance);
     }
   }
 

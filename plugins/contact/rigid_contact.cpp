@@ -141,7 +141,6 @@ class RigidContactNeedle final : public NeedleModel {
                                    "for the default",
                                    1e3 * *footprint_radius_option_, 1e3 * path_.radius));
     contact_.name = "needle";
-    contact_.components = {true, true, true};
     // A basis normal to the axis for azimuths of nodes that lie on it.
     const Vec3 helper = std::abs(path_.direction.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
     e1_ = path_.direction.cross(helper).normalized();
@@ -269,7 +268,7 @@ class RigidContactNeedle final : public NeedleModel {
     NeedleStatus s;
     s.depth = depth_;
     s.force = axial_force();
-    s.phase = punctured_ ? "penetration" : "indentation";
+    s.phase = punctured_ ? NeedlePhase::penetration : NeedlePhase::indentation;
     s.puncture_depth = punctured_ ? puncture_depth_ : -1.0;
     s.driven_nodes = static_cast<Index>(contacts_.size());
     return s;
@@ -377,28 +376,24 @@ class RigidContactNeedle final : public NeedleModel {
   }
 
   void release_open_contacts() {
-    std::size_t kept = 0;
+    std::vector<char> keep(contacts_.size(), 1);
     bool changed = false;
     for (std::size_t k = 0; k < contacts_.size(); ++k) {
       const Contact& c = contacts_[k];
       const bool open = !c.pinned && (c.tensile_steps >= release_steps_ || c.xi < -spacing_);
-      if (open) {
-        in_contact_[c.node] = 0;
-        released_before_[c.node] = 1;
-        changed = true;
-        ++released_;
-        continue;
-      }
-      if (kept != k) {
-        contacts_[kept] = contacts_[k];
-        contact_.reactions[kept] = contact_.reactions[k];
-      }
-      ++kept;
+      if (!open) continue;
+      in_contact_[c.node] = 0;
+      released_before_[c.node] = 1;
+      keep[k] = 0;
+      changed = true;
+      ++released_;
     }
     if (!changed) return;
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < contacts_.size(); ++k)
+      if (keep[k]) contacts_[kept++] = contacts_[k];
     contacts_.resize(kept);
-    contact_.reactions.resize(kept);
-    ++contact_.revision;
+    contact_.keep_entries(keep);
   }
 
   bool punctures(const Model& model, std::span<const double> u) {
@@ -459,19 +454,14 @@ class RigidContactNeedle final : public NeedleModel {
     c.pinned = pinned;
     c.gain = compliance(model, node);
     contacts_.push_back(c);
-    contact_.nodes.push_back(node);
-    contact_.values.push_back(Vec3::Zero());
+    contact_.add_node(node, Vec3::Zero());
     in_contact_[node] = 1;
     ++caught_;
-    ++contact_.revision;
   }
 
   void set_values(const Model& model) {
-    contact_.nodes.resize(contacts_.size());
-    contact_.values.resize(contacts_.size());
     for (std::size_t k = 0; k < contacts_.size(); ++k) {
       const Contact& c = contacts_[k];
-      contact_.nodes[k] = c.node;
       const Vec3 x = path_.entry + (depth_ - c.xi) * path_.direction + c.rho * c.azimuth;
       contact_.values[k] = x - model.nodes()[c.node];
     }

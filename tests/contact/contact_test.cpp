@@ -64,8 +64,8 @@ Outcome run(const json& needle) {
     out.positions.push_back(model.nodes()[i] + Vec3(u[3 * i], u[3 * i + 1], u[3 * i + 2]));
   for (const NodalConstraints* set : simulation.constraint_sets()) {
     if (set->name != "needle") continue;
-    for (std::size_t k = 0; k < set->nodes.size(); ++k)
-      out.contacts.push_back({out.positions[set->nodes[k]], set->reactions[k]});
+    for (std::size_t k = 0; k < set->nodes().size(); ++k)
+      out.contacts.push_back({out.positions[set->nodes()[k]], set->reactions[k]});
   }
   out.error_bound = simulation.integrator().report().at("error_bound_m").get<double>();
   for (double h : model.node_spacing()) out.spacing += h / static_cast<double>(model.node_count());
@@ -178,7 +178,7 @@ TEST(RigidContact, RefusesAnEntryOffTheBody) {
 // ctest runs each test in its own process: tests sharing a run are kept together.
 TEST(RigidContact, PuncturesKeepsTissueOutOfTheNeedleAndReportsTheForce) {
   const Outcome& o = outcome(0.3);
-  EXPECT_EQ(o.status.phase, "penetration");
+  EXPECT_EQ(o.status.phase, NeedlePhase::penetration);
   EXPECT_GE(o.status.puncture_depth, 0.0);
   EXPECT_LT(o.status.puncture_depth, kDepth);
   EXPECT_DOUBLE_EQ(o.status.depth, kDepth);
@@ -255,14 +255,14 @@ TEST(RigidContact, BeforePunctureTheFootprintFollowsTheTip) {
   Simulation simulation(scene, test::catalog());
   simulation.run(nullptr);
   const NeedleStatus s = simulation.needle()->status();
-  EXPECT_EQ(s.phase, "indentation");
+  EXPECT_EQ(s.phase, NeedlePhase::indentation);
   EXPECT_LT(s.puncture_depth, 0.0);
   EXPECT_GT(s.force, 0.0);
   const std::vector<double> u = simulation.interpolated_displacement();
   for (const NodalConstraints* set : simulation.constraint_sets()) {
     if (set->name != "needle") continue;
-    ASSERT_FALSE(set->nodes.empty());
-    for (Index n : set->nodes) {
+    ASSERT_FALSE(set->nodes().empty());
+    for (Index n : set->nodes()) {
       const Vec3 d(u[3 * n], u[3 * n + 1], u[3 * n + 2]);
       EXPECT_NEAR((d - kIndentation * kDirection).norm(), 0.0, 1e-9 * kIndentation) << "node " << n;
     }

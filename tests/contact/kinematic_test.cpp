@@ -52,15 +52,15 @@ Outcome run(const json& needle_options) {
   const std::vector<double> u = simulation.interpolated_displacement();
   for (const NodalConstraints* set : simulation.constraint_sets()) {
     if (set->name == "needle") {
-      out.components = set->components;
-      for (Index n : set->nodes)
+      out.components = set->components();
+      for (Index n : set->nodes())
         out.driven.push_back({kHeight - model.nodes()[n].z(), Vec3(u[3 * n], u[3 * n + 1], u[3 * n + 2])});
     }
     if (set->name != "needle_shaft") continue;
     // The displacement interpolated at each point from the nodal parameters, independently of the kernel's rows.
     std::vector<Index> support;
     std::vector<double> values;
-    for (const Vec3& x : set->points) {
+    for (const Vec3& x : set->points()) {
       EXPECT_TRUE(model.shape_functions_at(x, support, values));
       Vec3 displacement = Vec3::Zero();
       for (std::size_t k = 0; k < support.size(); ++k)
@@ -78,7 +78,7 @@ const json kPaperNodes = {{"driven", "nodes_near_axis"}, {"drive", "since_captur
 
 TEST(KinematicNeedle, PuncturesThenDrivesTheEntryAtCdTimesTheAdvance) {
   const Outcome out = run(kPaperNodes);
-  EXPECT_EQ(out.status.phase, "penetration");
+  EXPECT_EQ(out.status.phase, NeedlePhase::penetration);
   EXPECT_GT(out.status.puncture_depth, 0.0);
   EXPECT_LT(out.status.puncture_depth, 0.05 * kDepth);  // epsilon_p = 1e-5: a very short indentation
   EXPECT_TRUE(std::isfinite(out.status.force));
@@ -116,7 +116,7 @@ TEST(KinematicNeedle, FromReferenceOnThePathGivesGeometricDisplacements) {
 TEST(KinematicNeedle, FreeLateralPrescribesOnlyTheAxialComponent) {
   const Outcome out = run({{"driven", "nodes_near_axis"}, {"lateral", "free"}});
   EXPECT_EQ(out.components, (std::array<bool, 3>{false, false, true}));
-  EXPECT_EQ(out.status.phase, "penetration");
+  EXPECT_EQ(out.status.phase, NeedlePhase::penetration);
   // Nothing holds the driven nodes across the axis: some move sideways.
   double largest_lateral = 0.0;
   for (const Driven& d : out.driven) largest_lateral = std::max(largest_lateral, std::hypot(d.displacement.x(), d.displacement.y()));
@@ -125,7 +125,7 @@ TEST(KinematicNeedle, FreeLateralPrescribesOnlyTheAxialComponent) {
 
 TEST(KinematicNeedle, ShaftSurfacePointsFollowTheNeedleAroundTheAxis) {
   const Outcome out = run(json::object());  // the defaults: shaft_surface, from_reference, path
-  EXPECT_EQ(out.status.phase, "penetration");
+  EXPECT_EQ(out.status.phase, NeedlePhase::penetration);
   EXPECT_GT(out.status.force, 0.0);
   ASSERT_GE(out.shaft.size(), 9u);  // rings of at least 3 points, one ring per node spacing down to 5 mm
   Vec3 offset_sum = Vec3::Zero();

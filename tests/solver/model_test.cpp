@@ -228,24 +228,23 @@ TEST_P(ConstraintsTest, InterpolatedDisplacementEqualsThePrescribedOneToRoundOff
   NodalConstraints all, some;
   all.name = "all";
   some.name = "some";
-  some.components = {false, false, true};
+  some.set_components({false, false, true});
   std::mt19937 random(9);
   std::uniform_real_distribution<double> uniform(-1e-3, 1e-3);
   for (Index i = 0; i < model->node_count(); i += 5) {
     NodalConstraints& set = (i % 2 == 0) ? all : some;
-    set.nodes.push_back(i);
-    set.values.emplace_back(uniform(random), uniform(random), uniform(random));
+    set.add_node(i, Vec3(uniform(random), uniform(random), uniform(random)));
   }
   ConstraintSystem constraints(*model);
   constraints.update({&all, &some}, mass, true);
   const auto before = u;
   constraints.enforce(u, 1.0);
   for (const NodalConstraints* set : {&all, &some}) {
-    for (std::size_t k = 0; k < set->nodes.size(); ++k) {
-      const Vec3 v = model->interpolate_node(set->nodes[k], u);
+    for (std::size_t k = 0; k < set->size(); ++k) {
+      const Vec3 v = model->interpolate_node(set->nodes()[k], u);
       for (int c = 0; c < 3; ++c) {
-        if (!set->components[c]) continue;
-        EXPECT_NEAR(v[c], set->values[k][c], 1e-15) << set->name << " node " << set->nodes[k];
+        if (!set->components()[c]) continue;
+        EXPECT_NEAR(v[c], set->values[k][c], 1e-15) << set->name << " node " << set->nodes()[k];
       }
     }
   }

@@ -119,10 +119,10 @@ TEST(StableStepMonitor, ConstraintProjectionKeepsConstrainedValuesAndIsMOrthogon
   const double scale = Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(n)).lpNorm<Eigen::Infinity>();
   int checked = 0;
   for (const NodalConstraints* set : simulation.constraint_sets())
-    for (Index node : set->nodes) {
+    for (Index node : set->nodes()) {
       const Vec3 value = model.interpolate_node(node, pv);
       for (int c = 0; c < 3; ++c)
-        if (set->components[c]) {
+        if (set->components()[c]) {
           EXPECT_NEAR(value[c], 0.0, 1e-12 * scale) << set->name << " node " << node;
           ++checked;
         }

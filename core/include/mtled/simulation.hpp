@@ -43,7 +43,7 @@ class Simulation {
   // Internal forces for u (3 per node). Throws InstabilityError naming the integration point when F is
   // inadmissible (J <= 0).
   void internal_forces(std::span<const double> u, std::span<double> f);
-  bool has_external_forces() const { return force_drivers_ > 0; }
+  bool has_external_forces() const { return !force_sets_.empty(); }
   void external_forces(std::span<double> f);
   // Moves to the next step: drivers update for (new_time, new_load_fraction), u_new is corrected to satisfy
   // every constraint (reactions = correction / alpha), then becomes the current state.
@@ -76,8 +76,8 @@ class Simulation {
   std::vector<std::shared_ptr<BoundaryCondition>> boundaries_;
   std::shared_ptr<NeedleModel> needle_;
   std::vector<Driver*> drivers_;
-  int force_drivers_ = 0;
   std::vector<NodalConstraints*> constraint_sets_;
+  std::vector<NodalForces*> force_sets_;
   std::unique_ptr<ConstraintSystem> constraint_system_;
   std::shared_ptr<TimeIntegrator> integrator_;
 
