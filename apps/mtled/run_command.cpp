@@ -128,10 +128,9 @@ class RunObserver final : public StepObserver {
                           needle->status().force, to_string(needle->status().phase));
     // Once the load is on, a relaxation is most of a run: show how far it still has to go.
     if (simulation.load_fraction() >= 1.0) {
-      const json report = simulation.integrator().report();
-      if (report.contains("relative_error_bound") && report.contains("tolerance"))
-        text += fmt::format("  relaxing: error {:.2g} (tolerance {:.2g})", report["relative_error_bound"].get<double>(),
-                            report["tolerance"].get<double>());
+      if (const auto relaxation = simulation.integrator().report().relaxation)
+        text += fmt::format("  relaxing: error {:.2g} (tolerance {:.2g})", relaxation->relative_error_bound,
+                            relaxation->tolerance);
     }
     return text;
   }
@@ -168,7 +167,7 @@ class RunObserver final : public StepObserver {
 
 // The run's own error indicators, beside its timings (docs/studies.md): how far from equilibrium and from
 // rest the final state is, and the time step against the stable one.
-json error_indicators(Simulation& simulation, const json& integrator) {
+json error_indicators(Simulation& simulation, const IntegratorReport& integrator) {
   json out = json::object();
   // Global equilibrium: every constraint reaction and external force together vanish at a steady state with
   // plain quadrature; consistent integration leaves a quadrature error that falls under refinement
@@ -189,7 +188,7 @@ json error_indicators(Simulation& simulation, const json& integrator) {
   // Energies of the final state: kinetic over strain energy near 0 means the body is at rest.
   const Model& model = simulation.model();
   const double strain = model.strain_energy(simulation.displacement());
-  const double h = integrator.value("time_step_s", 0.0);
+  const double h = integrator.time_step;
   double kinetic = 0.0;
   if (h > 0.0) {
     const auto u = simulation.displacement();
@@ -207,7 +206,7 @@ json error_indicators(Simulation& simulation, const json& integrator) {
   // relaxation); above 1 the monitors must catch a blow-up.
   const double stable = simulation.stable_time_step();
   out["time_step_over_stable"] = stable > 0.0 ? json(h / stable) : json(nullptr);
-  if (integrator.contains("relative_error_bound")) out["steady_state_relative_error_bound"] = integrator["relative_error_bound"];
+  if (integrator.relaxation) out["steady_state_relative_error_bound"] = integrator.relaxation->relative_error_bound;
   return out;
 }
 
@@ -263,9 +262,9 @@ int run_scene(const RunOptions& options) {
     summary["ip_updates_per_s"] = solve_time > 0 ? static_cast<double>(simulation->force_evaluations()) *
                                                        model.integration_point_count() / solve_time
                                                  : 0.0;
-    const json report = simulation->integrator().report();
-    summary["integrator"] = report;
-    summary["time_step_s"] = report.value("time_step_s", 0.0);
+    const IntegratorReport report = simulation->integrator().report();
+    summary["integrator"] = to_json(report);
+    summary["time_step_s"] = report.time_step;
   };
 
   double setup_time = 0.0;
@@ -345,7 +344,7 @@ int run_scene(const RunOptions& options) {
   json reactions = json::object();
   for (const auto* set : simulation->constraint_sets()) reactions[set->name] = vec_json(set->total_reaction());
   summary["final_reactions_N"] = reactions;
-  summary["error_indicators"] = error_indicators(*simulation, summary["integrator"]);
+  summary["error_indicators"] = error_indicators(*simulation, simulation->integrator().report());
   summary["status"] = "ok";
   write_summary();
   log().info("done: {} steps, solve {:.2f} s, {:.3g} integration-point updates/s; results in {}", simulation->step(),

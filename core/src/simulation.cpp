@@ -160,8 +160,9 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
 
 Simulation::~Simulation() = default;
 
-void Simulation::scale_masses(double target) {
+void Simulation::equalise_critical_steps() {
   const auto& dt = model_->ip_critical_time_steps();
+  const double target = *std::max_element(dt.begin(), dt.end());
   std::vector<double> scale(dt.size());
   for (std::size_t i = 0; i < dt.size(); ++i) scale[i] = dt[i] < target ? (target / dt[i]) * (target / dt[i]) : 1.0;
   mass_ = model_->lumped_mass(scale);
@@ -332,7 +333,7 @@ void Simulation::check_stable_step(double step_size) {
                   "less",
                   step_size, last_stable_step_, load_.step, last_stable_step_ / stable_time_step_, stable_time_step_,
                   where, point_text(model_->nodes()[where]),
-                  0.9 * last_stable_step_ / step_size * integrator_->report().value("time_step_factor", 1.0)),
+                  0.9 * last_stable_step_ / step_size * integrator_->report().time_step_factor),
       *model_, where);
 }
 

@@ -5,9 +5,8 @@
 #include <cmath>
 
 #include "explicit_update.hpp"
-#include "mtled/load_curve.hpp"
+#include "load_curve.hpp"
 #include "mtled/plugin.hpp"
-#include "mtled/simulation.hpp"
 
 namespace mtled {
 
@@ -38,32 +37,38 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
         load_time_(p.optional_number("load_time").value_or(duration_)),
         curve_(load_curve_from_string(p.string("load_curve"))) {}
 
-  void initialise(Simulation& simulation) override {
-    stable_ = simulation.stable_time_step();
+  void initialise(DiscreteSystem& system) override {
+    stable_ = system.stable_time_step();
     planned_steps_ = static_cast<long>(std::ceil(duration_ / (factor_ * stable_)));
     h_ = duration_ / static_cast<double>(planned_steps_);  // lands exactly on the duration
+    // Central differences of M u'' + c M u' = r with u' = (u+ - u-) / 2h: (1 + ch/2) u+ = 2u - (1 - ch/2) u- + h^2 M^-1 r.
     beta_ = (2.0 - damping_ * h_) / (2.0 + damping_ * h_);
     alpha_ = 2.0 * h_ * h_ / (2.0 + damping_ * h_);
-    const std::size_t dofs = simulation.displacement().size();
+    const std::size_t dofs = system.displacement().size();
     f_int_.assign(dofs, 0.0);
     f_ext_.assign(dofs, 0.0);
     u_next_.assign(dofs, 0.0);
   }
 
-  void step(Simulation& simulation) override {
-    simulation.internal_forces(simulation.displacement(), f_int_);
-    if (simulation.has_external_forces()) simulation.external_forces(f_ext_);
-    explicit_update(simulation.displacement(), simulation.previous_displacement(), f_ext_, f_int_, simulation.mass(),
-                    alpha_, beta_, u_next_);
-    const double t = static_cast<double>(simulation.step() + 1) * h_;
-    simulation.complete_step(u_next_, t, load_fraction(curve_, t / load_time_), alpha_);
+  void step(DiscreteSystem& system) override {
+    system.internal_forces(system.displacement(), f_int_);
+    if (system.has_external_forces()) system.external_forces(f_ext_);
+    explicit_update(system.displacement(), system.previous_displacement(), f_ext_, f_int_, system.mass(), alpha_, beta_,
+                    u_next_);
+    const double t = static_cast<double>(system.step() + 1) * h_;
+    system.complete_step(u_next_, t, load_fraction(curve_, t / load_time_), alpha_);
   }
 
-  bool finished(const Simulation& simulation) const override { return simulation.step() >= planned_steps_; }
+  bool finished(const DiscreteSystem& system) const override { return system.step() >= planned_steps_; }
 
-  json report() const override {
-    return {{"type", "central_difference"}, {"time_step_s", h_},           {"stable_time_step_s", stable_},
-            {"time_step_factor", factor_},  {"planned_steps", planned_steps_}, {"damping_per_s", damping_}};
+  IntegratorReport report() const override {
+    IntegratorReport r;
+    r.type = "central_difference";
+    r.time_step = h_;
+    r.stable_time_step = stable_;
+    r.time_step_factor = factor_;
+    r.settings = {{"planned_steps", planned_steps_}, {"damping_per_s", damping_}};
+    return r;
   }
 
  private:

@@ -13,10 +13,10 @@
 #include <cmath>
 
 #include "explicit_update.hpp"
-#include "mtled/load_curve.hpp"
+#include "load_curve.hpp"
+#include "mtled/errors.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
-#include "mtled/simulation.hpp"
 
 namespace mtled {
 
@@ -62,47 +62,44 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
         mass_scaling_(p.boolean("mass_scaling")),
         update_every_(p.integer("damping_update_steps")) {}
 
-  void initialise(Simulation& simulation) override {
-    unscaled_stable_ = simulation.stable_time_step();
-    if (mass_scaling_) {
-      const auto& dt = simulation.model().ip_critical_time_steps();
-      simulation.scale_masses(*std::max_element(dt.begin(), dt.end()));
-    }
-    h_ = factor_ * simulation.stable_time_step();
+  void initialise(DiscreteSystem& system) override {
+    unscaled_stable_ = system.stable_time_step();
+    if (mass_scaling_) system.equalise_critical_steps();
+    h_ = factor_ * system.stable_time_step();
     // Start heavily damped (k = 20) until the first estimate of the lowest frequency arrives.
     set_frequency(0.1 * 2.0 / h_);
-    const std::size_t dofs = simulation.displacement().size();
+    const std::size_t dofs = system.displacement().size();
     f_int_.assign(dofs, 0.0);
     f_int_previous_.assign(dofs, 0.0);
     f_ext_.assign(dofs, 0.0);
     u_next_.assign(dofs, 0.0);
   }
 
-  void step(Simulation& simulation) override {
-    const auto u = simulation.displacement();
-    const auto u_previous = simulation.previous_displacement();
-    const auto mass = simulation.mass();
+  void step(DiscreteSystem& system) override {
+    const auto u = system.displacement();
+    const auto u_previous = system.previous_displacement();
+    const auto mass = system.mass();
     f_int_previous_.swap(f_int_);
-    simulation.internal_forces(u, f_int_);
-    if (simulation.has_external_forces()) simulation.external_forces(f_ext_);
+    system.internal_forces(u, f_int_);
+    if (system.has_external_forces()) system.external_forces(f_ext_);
 
-    const long n = simulation.step();
+    const long n = system.step();
     if (n >= 2 && n % update_every_ == 0) estimate_frequency(u, u_previous, mass);
 
     explicit_update(u, u_previous, f_ext_, f_int_, mass, alpha_, beta_, u_next_);
     const double fraction = load_fraction(curve_, static_cast<double>(n + 1) / static_cast<double>(load_steps_));
-    simulation.complete_step(u_next_, static_cast<double>(n + 1) * h_, fraction, alpha_);
+    system.complete_step(u_next_, static_cast<double>(n + 1) * h_, fraction, alpha_);
 
-    if (n + 1 >= load_steps_) check_convergence(simulation);
+    if (n + 1 >= load_steps_) check_convergence(system);
     // A long relaxation shows nothing else while it runs (--log-level debug).
     if ((n + 1) % 500 == 0)
       log().debug("dynamic relaxation step {}: lowest frequency {:.4g} rad/s, rate {:.6f}, error bound {:.3g} m ({:.3g} "
                   "of the largest displacement)",
                   n + 1, omega_min_, rho_, error_bound_, relative_error_bound());
-    if (!converged_ && simulation.step() >= max_steps_) {
+    if (!converged_ && system.step() >= max_steps_) {
       Diagnostic d;
-      d.step = simulation.step();
-      d.time = simulation.time();
+      d.step = system.step();
+      d.time = system.time();
       d.what = "not_converged";
       // Stopped while still loading, there is no error estimate yet: say how far the load got instead.
       d.detail = n + 1 < load_steps_
@@ -117,21 +114,17 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     }
   }
 
-  bool finished(const Simulation&) const override { return converged_; }
+  bool finished(const DiscreteSystem&) const override { return converged_; }
 
-  json report() const override {
-    return {{"type", "dynamic_relaxation"},
-            {"time_step_s", h_},
-            {"stable_time_step_s", unscaled_stable_},
-            {"time_step_factor", factor_},
-            {"mass_scaling", mass_scaling_},
-            {"load_steps", load_steps_},
-            {"converged", converged_},
-            {"error_bound_m", error_bound_},
-            {"relative_error_bound", relative_error_bound()},
-            {"tolerance", tolerance_},
-            {"lowest_frequency_rad_per_s", omega_min_},
-            {"convergence_rate", rho_}};
+  IntegratorReport report() const override {
+    IntegratorReport r;
+    r.type = "dynamic_relaxation";
+    r.time_step = h_;
+    r.stable_time_step = unscaled_stable_;
+    r.time_step_factor = factor_;
+    r.relaxation = RelaxationReport{converged_, error_bound_, relative_error_bound(), tolerance_, omega_min_, rho_};
+    r.settings = {{"mass_scaling", mass_scaling_}, {"load_steps", load_steps_}};
+    return r;
   }
 
  private:
@@ -159,9 +152,9 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     set_frequency(std::min(std::sqrt(stiffness / inertia), 2.0 / h_));
   }
 
-  void check_convergence(const Simulation& simulation) {
-    const auto u = simulation.displacement();
-    const auto u_previous = simulation.previous_displacement();
+  void check_convergence(const DiscreteSystem& system) {
+    const auto u = system.displacement();
+    const auto u_previous = system.previous_displacement();
     double increment = 0.0, largest = 0.0;
     for (std::size_t i = 0; i < u.size(); ++i) {
       increment = std::max(increment, std::abs(u[i] - u_previous[i]));

@@ -1,5 +1,6 @@
 #pragma once
-// The damped central-difference update both integrators share (DESIGN.md, "Time integration"):
+// The damped central-difference update both integrators share (mass-proportional damping c, step h; the
+// form of Joldes, Wittek and Miller, IJNMBE 2011, for dynamic relaxation):
 //   u+ = u + beta (u - u-) + alpha M^-1 (f_ext - f_int).
 // beta = 1, alpha = h^2 is the undamped central difference.
 #include <span>

@@ -67,7 +67,7 @@ Outcome run(const json& needle) {
     for (std::size_t k = 0; k < set->nodes().size(); ++k)
       out.contacts.push_back({out.positions[set->nodes()[k]], set->reactions[k]});
   }
-  out.error_bound = simulation.integrator().report().at("error_bound_m").get<double>();
+  out.error_bound = simulation.integrator().report().relaxation.value().error_bound;
   for (double h : model.node_spacing()) out.spacing += h / static_cast<double>(model.node_count());
   return out;
 }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mtled/constraints.hpp"
+#include "mtled/interfaces/integrator.hpp"
 #include "mtled/json.hpp"
 #include "mtled/model.hpp"
 #include "mtled/scene.hpp"
@@ -19,35 +20,33 @@ struct StepObserver {
   virtual void on_step(const class Simulation& simulation) = 0;
 };
 
-class Simulation {
+class Simulation final : public DiscreteSystem {
  public:
   Simulation(const Scene& scene, PluginCatalog& catalog);
-  ~Simulation();
+  ~Simulation() override;
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
-  // ---- services for integrators
-  const Model& model() const { return *model_; }
-  std::span<double> displacement() { return u_; }
-  std::span<const double> displacement() const { return u_; }
-  std::span<const double> previous_displacement() const { return u_previous_; }
-  double time() const { return load_.time; }
-  long step() const { return load_.step; }
-  double load_fraction() const { return load_.load_fraction; }
-  std::span<const double> mass() const { return mass_; }
+  // ---- the DiscreteSystem the integrator advances
+  std::span<const double> displacement() const override { return u_; }
+  std::span<const double> previous_displacement() const override { return u_previous_; }
+  std::span<const double> mass() const override { return mass_; }
+  long step() const override { return load_.step; }
+  double time() const override { return load_.time; }
   // Critical time step (before any safety factor) for the current masses: min over integration points.
-  double stable_time_step() const { return stable_time_step_; }
-  // Dynamic relaxation only: raise the density at each integration point so that its critical step is at
-  // least `target` (mass scaling; changes the dynamics, not the steady state).
-  void scale_masses(double target);
-  // Internal forces for u (3 per node). Throws InstabilityError naming the integration point when F is
-  // inadmissible (J <= 0).
-  void internal_forces(std::span<const double> u, std::span<double> f);
-  bool has_external_forces() const { return !force_sets_.empty(); }
-  void external_forces(std::span<double> f);
-  // Moves to the next step: drivers update for (new_time, new_load_fraction), u_new is corrected to satisfy
-  // every constraint (reactions = correction / alpha), then becomes the current state.
-  void complete_step(std::span<double> u_new, double new_time, double new_load_fraction, double alpha);
+  double stable_time_step() const override { return stable_time_step_; }
+  // Raises the density at each integration point so that its critical step is the largest one's.
+  void equalise_critical_steps() override;
+  // Throws InstabilityError naming the integration point when F is inadmissible (J <= 0).
+  void internal_forces(std::span<const double> u, std::span<double> f) override;
+  bool has_external_forces() const override { return !force_sets_.empty(); }
+  void external_forces(std::span<double> f) override;
+  // Drivers update for (new_time, new_load_fraction), u_new is corrected to satisfy every constraint
+  // (reactions = correction / alpha), then becomes the current state.
+  void complete_step(std::span<double> u_new, double new_time, double new_load_fraction, double alpha) override;
+
+  const Model& model() const { return *model_; }
+  double load_fraction() const { return load_.load_fraction; }
 
   // ---- the loop and what outputs read
   void run(StepObserver* observer);

@@ -1,24 +1,78 @@
 #pragma once
-#include <nlohmann/json.hpp>
+// Time integrators and the narrow view of the simulation they work on.
+#include <cmath>
+#include <optional>
+#include <span>
+#include <string>
 
+#include "mtled/json.hpp"
 #include "mtled/parameters.hpp"
 
 namespace mtled {
 
-class Simulation;
+// The semi-discrete equations of motion M u'' + f_int(u) = f_ext(t), M lumped (one mass per node, three
+// unknowns per node), and the one call that completes a step. The kernel implements it for a scene; the
+// integrator conformance suite implements it for linear oscillators. An integrator sees nothing else.
+class DiscreteSystem {
+ public:
+  virtual ~DiscreteSystem();
 
-// Advances the state in time. The kernel's loop calls initialise once, then step until finished, running
-// its stability monitors and recorders between steps.
+  virtual std::span<const double> displacement() const = 0;           // u_n, 3 per node
+  virtual std::span<const double> previous_displacement() const = 0;  // u_(n-1)
+  virtual std::span<const double> mass() const = 0;                   // per node (kg)
+  virtual long step() const = 0;                                      // n
+  virtual double time() const = 0;                                    // s (pseudo-time for relaxation)
+
+  // Critical time step of the explicit update for the masses in use, before any safety factor.
+  virtual double stable_time_step() const = 0;
+  // Mass scaling, valid for steady-state solutions only: raises the masses so that every part of the body has
+  // the critical step of its slowest part; stable_time_step() then returns that step.
+  virtual void equalise_critical_steps() = 0;
+
+  // f = f_int(u). Throws InstabilityError when u is inadmissible (inverted material).
+  virtual void internal_forces(std::span<const double> u, std::span<double> f) = 0;
+  virtual bool has_external_forces() const = 0;
+  // f = f_ext at the current load.
+  virtual void external_forces(std::span<double> f) = 0;
+  // Makes u_new the state of step n + 1 at `time` with the loads at `load_fraction`: the drivers move, the
+  // constraints correct u_new in place. `alpha` is the integrator's factor on M^-1 f in its update, so that the
+  // constraint forces (reactions) are the correction over alpha.
+  virtual void complete_step(std::span<double> u_new, double time, double load_fraction, double alpha) = 0;
+};
+
+// A steady-state integrator's account of how far it is from the steady state.
+struct RelaxationReport {
+  bool converged = false;
+  double error_bound = INFINITY;      // m: bound on the distance to the steady state, largest over the unknowns
+  double relative_error_bound = 0.0;  // error_bound over the largest displacement (0 before any)
+  double tolerance = 0.0;             // on relative_error_bound
+  double lowest_frequency = 0.0;      // rad/s: the estimate the damping is tuned to
+  double convergence_rate = 0.0;      // per step
+};
+
+struct IntegratorReport {
+  std::string type;
+  double time_step = 0.0;         // s
+  double stable_time_step = 0.0;  // s, of the unscaled masses, before the factor
+  double time_step_factor = 1.0;
+  std::optional<RelaxationReport> relaxation;  // steady-state integrators only
+  json settings = json::object();              // the integrator's other settings and counts
+};
+
+// The "integrator" object of summary.json.
+json to_json(const IntegratorReport& report);
+
+// Advances a DiscreteSystem in time: initialise once, then step until finished.
 class TimeIntegrator {
  public:
   static constexpr Category category = Category::integrator;
   virtual ~TimeIntegrator();
 
-  virtual void initialise(Simulation& simulation) = 0;
-  virtual void step(Simulation& simulation) = 0;
-  virtual bool finished(const Simulation& simulation) const = 0;
-  // Error indicators and settings for summary.json ("integrator" object).
-  virtual nlohmann::json report() const = 0;
+  virtual void initialise(DiscreteSystem& system) = 0;
+  // One step, ending with system.complete_step(...). Throws InstabilityError when it must give up.
+  virtual void step(DiscreteSystem& system) = 0;
+  virtual bool finished(const DiscreteSystem& system) const = 0;
+  virtual IntegratorReport report() const = 0;
 };
 
 }  // namespace mtled

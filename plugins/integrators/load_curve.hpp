@@ -1,7 +1,7 @@
 #pragma once
 // How the applied load (prescribed displacements, needle depth) grows from 0 to 1 over the loading time.
 // "smooth" is the quintic 10x^3 - 15x^4 + 6x^5: zero velocity and acceleration at both ends, so loading
-// starts and stops without exciting the high modes (DESIGN.md, "Time integration").
+// starts and stops without exciting the high modes (the quintic "smoothstep" ramp).
 #include <algorithm>
 #include <string>
 

@@ -1,0 +1,97 @@
+// What the interfaces in mtled/interfaces/ define beyond their declarations.
+#include <fmt/format.h>
+
+#include "mtled/interfaces/driver.hpp"
+#include "mtled/interfaces/integrator.hpp"
+#include "mtled/interfaces/material.hpp"
+#include "mtled/interfaces/mesh_source.hpp"
+#include "mtled/interfaces/shape_functions.hpp"
+
+namespace mtled {
+
+// Key functions: the interfaces' type information lives in libmtled_core only.
+MeshSource::~MeshSource() = default;
+ShapeFunctions::~ShapeFunctions() = default;
+Material::~Material() = default;
+Driver::~Driver() = default;
+BoundaryCondition::~BoundaryCondition() = default;
+NeedleModel::~NeedleModel() = default;
+TimeIntegrator::~TimeIntegrator() = default;
+DiscreteSystem::~DiscreteSystem() = default;
+
+std::string_view to_string(NeedlePhase phase) {
+  return phase == NeedlePhase::penetration ? "penetration" : "indentation";
+}
+
+Vec3 NodalConstraints::total_reaction() const {
+  Vec3 sum = Vec3::Zero();
+  for (const auto& r : reactions) sum += r;
+  return sum;
+}
+
+void NodalConstraints::set_components(const std::array<bool, 3>& components) {
+  components_ = components;
+  ++revision_;
+}
+
+void NodalConstraints::assign_nodes(std::vector<Index> nodes, const Vec3& value) {
+  nodes_ = std::move(nodes);
+  points_.clear();
+  values.assign(nodes_.size(), value);
+  ++revision_;
+}
+
+void NodalConstraints::add_node(Index node, const Vec3& value) {
+  nodes_.push_back(node);
+  values.push_back(value);
+  ++revision_;
+}
+
+void NodalConstraints::add_point(const Vec3& point, const Vec3& value) {
+  points_.push_back(point);
+  values.push_back(value);
+  ++revision_;
+}
+
+void NodalConstraints::keep_entries(const std::vector<char>& keep) {
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    if (!keep[k]) continue;
+    if (!nodes_.empty()) nodes_[kept] = nodes_[k];
+    if (!points_.empty()) points_[kept] = points_[k];
+    if (k < values.size()) values[kept] = values[k];
+    if (k < reactions.size()) reactions[kept] = reactions[k];
+    ++kept;
+  }
+  if (!nodes_.empty()) nodes_.resize(kept);
+  if (!points_.empty()) points_.resize(kept);
+  values.resize(std::min(values.size(), kept));
+  reactions.resize(std::min(reactions.size(), kept));
+  ++revision_;
+}
+
+void NodalConstraints::clear() {
+  nodes_.clear();
+  points_.clear();
+  values.clear();
+  ++revision_;
+}
+
+json to_json(const IntegratorReport& report) {
+  json out = {{"type", report.type},
+              {"time_step_s", report.time_step},
+              {"stable_time_step_s", report.stable_time_step},
+              {"time_step_factor", report.time_step_factor}};
+  if (const auto& r = report.relaxation) {
+    out["converged"] = r->converged;
+    out["error_bound_m"] = std::isfinite(r->error_bound) ? json(r->error_bound) : json(nullptr);
+    out["relative_error_bound"] = r->relative_error_bound;
+    out["tolerance"] = r->tolerance;
+    out["lowest_frequency_rad_per_s"] = r->lowest_frequency;
+    out["convergence_rate"] = r->convergence_rate;
+  }
+  out.update(report.settings);
+  return out;
+}
+
+}  // namespace mtled

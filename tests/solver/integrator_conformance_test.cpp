@@ -1,0 +1,171 @@
+// Conformance suite for every time-integrator plugin the catalog finds, each built from its declaration's
+// example() block through the real loader and run on a DiscreteSystem made here: independent linear
+// oscillators m u'' + k u = F, one per unknown, starting from rest at u = 0 (nothing of the meshless model).
+//
+//  - every integrator: its time step never exceeds time_step_factor times the system's stable step;
+//  - transient integrators (no relaxation report): undamped, the central-difference recurrence
+//    u(n+1) - 2 u(n) + u(n-1) = h^2 (F - k u(n)) / m has the closed-form solution
+//    u(n) = u* (1 - cos((n + 1/2) theta) / cos(theta / 2)),  u* = F / k,  cos(theta) = 1 - (h omega)^2 / 2,
+//    which the integrator must reproduce to round-off, and which approaches u*(1 - cos(omega (t + h/2))) at
+//    second order in h (starting from u(-1) = u(0) puts the rest state half a step before t = 0);
+//  - steady-state integrators: they stop at the static solution u* = F / k within their tolerance.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "mtled/interfaces/integrator.hpp"
+#include "test_support.hpp"
+
+namespace mtled {
+namespace {
+
+// Two nodes, three unknowns each, with different masses, stiffnesses and loads.
+class Oscillators final : public DiscreteSystem {
+ public:
+  Oscillators() : mass_{2.0, 0.5}, stiffness_{100.0, 60.0, 30.0, 40.0, 90.0, 10.0}, load_{1.0, -2.0, 0.5, 3.0, 1.0, -1.0} {
+    u_.assign(6, 0.0);
+    u_previous_.assign(6, 0.0);
+  }
+
+  double omega(std::size_t d) const { return std::sqrt(stiffness_[d] / mass_[d / 3]); }
+  double static_solution(std::size_t d) const { return load_[d] / stiffness_[d]; }
+  long steps_completed() const { return step_; }
+
+  std::span<const double> displacement() const override { return u_; }
+  std::span<const double> previous_displacement() const override { return u_previous_; }
+  std::span<const double> mass() const override { return mass_; }
+  long step() const override { return step_; }
+  double time() const override { return time_; }
+  // Central differences are stable for h <= 2 / omega_max.
+  double stable_time_step() const override {
+    double fastest = 0.0;
+    for (std::size_t d = 0; d < 6; ++d) fastest = std::max(fastest, omega(d));
+    return 2.0 / fastest;
+  }
+  void equalise_critical_steps() override {
+    // Each node's critical step 2 / (its fastest omega), raised to the slowest node's.
+    double slowest = 0.0;
+    for (std::size_t node = 0; node < 2; ++node) slowest = std::max(slowest, node_step(node));
+    for (std::size_t node = 0; node < 2; ++node) mass_[node] *= std::pow(slowest / node_step(node), 2);
+  }
+  void internal_forces(std::span<const double> u, std::span<double> f) override {
+    for (std::size_t d = 0; d < 6; ++d) f[d] = stiffness_[d] * u[d];
+  }
+  bool has_external_forces() const override { return true; }
+  void external_forces(std::span<double> f) override { std::copy(load_.begin(), load_.end(), f.begin()); }
+  void complete_step(std::span<double> u_new, double time, double, double) override {
+    u_previous_.swap(u_);
+    std::copy(u_new.begin(), u_new.end(), u_.begin());
+    time_ = time;
+    ++step_;
+  }
+
+ private:
+  double node_step(std::size_t node) const {
+    return 2.0 / std::max({omega(3 * node), omega(3 * node + 1), omega(3 * node + 2)});
+  }
+
+  std::vector<double> mass_, stiffness_, load_, u_, u_previous_;
+  long step_ = 0;
+  double time_ = 0.0;
+};
+
+std::vector<std::string> integrator_names() { return test::catalog().names(Category::integrator); }
+
+TEST(IntegratorCatalog, FindsTheBuiltInIntegrators) {
+  const auto names = integrator_names();
+  EXPECT_NE(std::find(names.begin(), names.end(), "central_difference"), names.end());
+  EXPECT_NE(std::find(names.begin(), names.end(), "dynamic_relaxation"), names.end());
+}
+
+class IntegratorConformance : public ::testing::TestWithParam<std::string> {
+ protected:
+  // The declaration's example, with `overrides` for the parameters it declares.
+  std::shared_ptr<TimeIntegrator> make(const json& overrides) const {
+    const ComponentDeclaration& declaration = test::catalog().load(Category::integrator, GetParam());
+    json block = declaration.example();
+    for (const auto& [key, value] : overrides.items())
+      if (declaration.find(key)) block[key] = value;
+    return test::make<TimeIntegrator>(GetParam(), block);
+  }
+  static bool is_steady_state(TimeIntegrator& integrator) {
+    Oscillators probe;
+    integrator.initialise(probe);
+    return integrator.report().relaxation.has_value();
+  }
+};
+
+TEST_P(IntegratorConformance, TimeStepNeverExceedsTheFactorTimesTheStableStep) {
+  for (const double factor : {0.3, 0.9, 1.0}) {
+    Oscillators system;
+    const auto integrator = make({{"time_step_factor", factor}});
+    integrator->initialise(system);
+    for (int n = 0; n < 20 && !integrator->finished(system); ++n) integrator->step(system);
+    const IntegratorReport report = integrator->report();
+    EXPECT_GT(report.time_step, 0.0);
+    EXPECT_LE(report.time_step, factor * system.stable_time_step() * (1.0 + 1e-14)) << "factor " << factor;
+    EXPECT_DOUBLE_EQ(report.time_step_factor, factor);
+  }
+}
+
+TEST_P(IntegratorConformance, TransientOscillatorsFollowTheCentralDifferenceSolutionExactly) {
+  if (is_steady_state(*make({}))) GTEST_SKIP() << GetParam() << " solves for the steady state";
+  // Integrates over 3 periods of the slowest oscillator with two time-step factors; at each step every unknown
+  // must equal the closed form to round-off; against the exact continuous motion the error (a phase error of
+  // about omega t (h omega)^2 / 24) falls as h^2.
+  Oscillators probe;
+  double slowest = INFINITY;
+  for (std::size_t d = 0; d < 6; ++d) slowest = std::min(slowest, probe.omega(d));
+  const double duration = 3.0 * 2.0 * std::numbers::pi / slowest;
+  double previous_error = 0.0;
+  for (const double factor : {0.04, 0.02}) {  // small enough for the asymptotic h^2 phase error
+    Oscillators system;
+    const auto integrator = make({{"time_step_factor", factor}, {"duration", duration}, {"damping", 0.0}});
+    integrator->initialise(system);
+    double continuous_error = 0.0;
+    while (!integrator->finished(system)) {
+      integrator->step(system);
+      const double h = integrator->report().time_step;
+      const auto n = static_cast<double>(system.steps_completed());
+      for (std::size_t d = 0; d < 6; ++d) {
+        const double u_star = system.static_solution(d), w = system.omega(d);
+        const double theta = std::acos(1.0 - 0.5 * h * h * w * w);
+        const double discrete = u_star * (1.0 - std::cos((n + 0.5) * theta) / std::cos(0.5 * theta));
+        ASSERT_NEAR(system.displacement()[d], discrete, 1e-11 * std::abs(u_star)) << "unknown " << d << " step " << n;
+        continuous_error = std::max(continuous_error,
+                                    std::abs(system.displacement()[d] - u_star * (1.0 - std::cos(w * (n + 0.5) * h))) / std::abs(u_star));
+      }
+    }
+    EXPECT_NEAR(system.time(), duration, 1e-12 * duration);
+    if (previous_error > 0.0) {
+      const double order = std::log2(previous_error / continuous_error);
+      EXPECT_NEAR(order, 2.0, 0.2) << "errors " << previous_error << " then " << continuous_error;
+    }
+    previous_error = continuous_error;
+  }
+}
+
+TEST_P(IntegratorConformance, SteadyStateIntegratorsStopAtTheStaticSolution) {
+  if (!is_steady_state(*make({}))) GTEST_SKIP() << GetParam() << " is a transient integrator";
+  constexpr double kTolerance = 1e-8;
+  Oscillators system;
+  const auto integrator = make({{"tolerance", kTolerance}, {"load_steps", 10}, {"max_steps", 100000}});
+  integrator->initialise(system);
+  while (!integrator->finished(system)) integrator->step(system);
+  double largest = 0.0;
+  for (std::size_t d = 0; d < 6; ++d) largest = std::max(largest, std::abs(system.static_solution(d)));
+  for (std::size_t d = 0; d < 6; ++d)
+    EXPECT_NEAR(system.displacement()[d], system.static_solution(d), 10.0 * kTolerance * largest) << "unknown " << d;
+  const IntegratorReport report = integrator->report();
+  ASSERT_TRUE(report.relaxation.has_value());
+  EXPECT_TRUE(report.relaxation->converged);
+  EXPECT_LE(report.relaxation->relative_error_bound, kTolerance);
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryIntegrator, IntegratorConformance, ::testing::ValuesIn(integrator_names()),
+                         [](const auto& test_info) { return test_info.param; });
+
+}  // namespace
+}  // namespace mtled
