@@ -6,12 +6,14 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <random>
 
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/scene.hpp"
+#include "mtled/simd.hpp"
 #include "mtled/simulation.hpp"
 
 namespace {
@@ -28,6 +30,8 @@ Simulation& simulation_for(int threads) {
   static std::map<int, Setup> setups;
   auto& s = setups[threads];
   if (!s.simulation) {
+    // MTLED_SIMD=avx2 (or sse4, baseline, ...) times another instruction set than the CPU's best.
+    if (const char* simd = std::getenv("MTLED_SIMD")) simd::use(simd);
     omp_set_num_threads(threads);
     SceneDocument document = read_scene(MTLED_SOURCE_DIR "/share/scenes/needle_small_sample.json");
     s.catalog = std::make_unique<PluginCatalog>(plugin_search_path({}, scene_plugin_paths(document)));
@@ -53,7 +57,7 @@ void BM_InternalForces(benchmark::State& state) {
     benchmark::ClobberMemory();
   }
   const auto& rows = model.ip_supports();
-  const double entries = static_cast<double>(rows.nodes.size());
+  const double entries = static_cast<double>(rows.entries());
   const double ips = static_cast<double>(model.integration_point_count());
   const double bytes = entries * (sizeof(Index) + 3 * sizeof(double))  // support rows
                        + entries * 3 * sizeof(double) * 2               // u read, f accumulated
@@ -62,6 +66,7 @@ void BM_InternalForces(benchmark::State& state) {
   state.counters["bytes_per_s"] = benchmark::Counter(bytes, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["support_mean"] = entries / ips;
   state.counters["integration_points"] = ips;
+  state.SetLabel(simd::current());
 }
 BENCHMARK(BM_InternalForces)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
 

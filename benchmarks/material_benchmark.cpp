@@ -1,5 +1,6 @@
 // Second Piola-Kirchhoff stress of every registered material for a moderately strained F (the per-
-// integration-point constitutive cost inside the force kernel).
+// integration-point constitutive cost inside the force kernel), one point at a time and in the batches the
+// kernel uses.
 #include <benchmark/benchmark.h>
 
 #include "mtled/interfaces/material.hpp"
@@ -38,5 +39,26 @@ void BM_MaterialStress(benchmark::State& state, const std::string& name) {
 }
 BENCHMARK_CAPTURE(BM_MaterialStress, neo_hookean, std::string("neo_hookean"));
 BENCHMARK_CAPTURE(BM_MaterialStress, ogden, std::string("ogden"));
+
+// The same F in every lane of a full batch (what the force kernel calls); the time is per point.
+void BM_MaterialStressBatch(benchmark::State& state, const std::string& name) {
+  const auto m = material(name);
+  Mat3 F;
+  F << 1.05, 0.02, -0.01, 0.01, 0.97, 0.03, -0.02, 0.01, 0.99;
+  StressBatch batch;
+  batch.count = StressBatch::kCapacity;
+  for (int p = 0; p < batch.count; ++p)
+    for (int c = 0; c < 9; ++c) batch.F[c][p] = F(c / 3, c % 3);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(batch.F);
+    m->stress_batch(batch);
+    benchmark::DoNotOptimize(batch.S);
+  }
+  state.SetItemsProcessed(state.iterations() * batch.count);
+  state.counters["ns_per_point"] = benchmark::Counter(static_cast<double>(batch.count),
+                                                      benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+BENCHMARK_CAPTURE(BM_MaterialStressBatch, neo_hookean, std::string("neo_hookean"));
+BENCHMARK_CAPTURE(BM_MaterialStressBatch, ogden, std::string("ogden"));
 
 }  // namespace

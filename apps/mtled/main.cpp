@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
+#include "mtled/simd.hpp"
 #include "mtled/version.hpp"
 
 int main(int argc, char** argv) {
@@ -20,6 +21,10 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
   std::vector<std::filesystem::path> plugin_paths;
   cli.add_option("--plugin-path", plugin_paths, "extra plugin folder, searched first (repeatable)");
+  std::string simd = "best";
+  cli.add_option("--simd", simd,
+                 "instruction set of the vectorised kernels: best (the default: the best this CPU has), or one of "
+                 "avx512, avx2, sse4, baseline (the portable one) to compare; answers agree to round-off");
 
   app::RunOptions run;
   auto* run_cmd = cli.add_subcommand("run", "run a scene");
@@ -75,6 +80,7 @@ int main(int argc, char** argv) {
   study.log_level = log_level;
 
   try {
+    simd::use(simd);
     if (*run_cmd) return app::run_scene(run);
     if (*validate_cmd) return app::validate_scene_command(validate);
     if (*plugins_cmd) return app::list_plugins(plugin_paths, as_json, as_markdown, describe);

@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "mtled/log.hpp"
 #include "mtled/output.hpp"
+#include "mtled/simd.hpp"
 #include "mtled/simulation.hpp"
 #include "mtled/version.hpp"
 #include "progress.hpp"
@@ -232,7 +233,8 @@ int run_scene(const RunOptions& options) {
                   {"mtled_version", MTLED_VERSION_STRING},
                   {"scene", fs::absolute(options.scene.scene).string()},
                   {"overrides", options.scene.overrides},
-                  {"threads", threads}};
+                  {"threads", threads},
+                  {"simd", simd::current()}};
   auto write_summary = [&] { folder.write_file("summary.json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; }); };
   write_summary();
 

@@ -19,6 +19,14 @@ NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
 DiscreteSystem::~DiscreteSystem() = default;
 
+void Material::stress_batch(StressBatch& batch) const noexcept {
+  for (int p = 0; p < batch.count; ++p) {
+    Mat3 S;
+    batch.admissible[p] = stress(batch.deformation_gradient(p), S);
+    batch.set_stress(p, batch.admissible[p] ? S : Mat3::Zero());
+  }
+}
+
 std::string_view to_string(NeedlePhase phase) {
   return phase == NeedlePhase::penetration ? "penetration" : "indentation";
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "force_kernel.hpp"
 #include "mtled/log.hpp"
 
 namespace mtled {
@@ -24,48 +25,44 @@ struct RowFailure {
   std::string message;
 };
 
-// The force kernel's two halves, file-local so that they inline into the loops (a member function of the
-// shared library would be called through the PLT).
-// F = I + sum_I u_I (x) grad N_I over the integration point's row (uncorrected gradients).
-inline Mat3 gather_F(const SupportRows& rows, Index ip, const double* u) {
-  const double* grads = rows.gradients.data();
-  const Index* nodes = rows.nodes.data();
-  // Nine scalar sums, each entry's u and gradient loaded once: with F's entries as Eigen lvalues the compiler
-  // must assume a store to F may change u, and stored F and reloaded u at every term (47 instructions an
-  // entry instead of about 25, measured with callgrind; docs/performance.md). Same sums in the same order.
-  double f00 = 1, f01 = 0, f02 = 0, f10 = 0, f11 = 1, f12 = 0, f20 = 0, f21 = 0, f22 = 1;  // F = I + ...
-  for (std::int64_t k = rows.offsets[ip]; k < rows.offsets[ip + 1]; ++k) {
-    const double* g = grads + 3 * k;
-    const double* ui = u + 3 * static_cast<std::size_t>(nodes[k]);
-    const double g0 = g[0], g1 = g[1], g2 = g[2], u0 = ui[0], u1 = ui[1], u2 = ui[2];
-    f00 += u0 * g0, f01 += u0 * g1, f02 += u0 * g2;
-    f10 += u1 * g0, f11 += u1 * g1, f12 += u1 * g2;
-    f20 += u2 * g0, f21 += u2 * g1, f22 += u2 * g2;
+// F = I + sum_I u_I (x) grad N_I over one row, u 3 per node: for diagnostics and output, one point at a time.
+Mat3 deformation_gradient_at(const GradientRows& rows, Index ip, const double* u) {
+  Mat3 F = Mat3::Identity();
+  for (int k = 0; k < rows.size(ip); ++k) {
+    const double* ui = u + 3 * static_cast<std::size_t>(rows.node(ip, k));
+    F += Vec3(ui[0], ui[1], ui[2]) * rows.gradient(ip, k).transpose();
   }
-  Mat3 F;
-  F << f00, f01, f02, f10, f11, f12, f20, f21, f22;
   return F;
 }
 
-// forces_I += P (grad N_I + xi_I) for each node I of the row.
-inline void scatter_stress(const SupportRows& rows, const double* xi, Index ip, const Mat3& P, double* forces) {
-  const double* grads = rows.gradients.data();
-  const Index* nodes = rows.nodes.data();
-  // P in locals: the force stores could otherwise alias it (see gather_F).
-  const double p00 = P(0, 0), p01 = P(0, 1), p02 = P(0, 2), p10 = P(1, 0), p11 = P(1, 1), p12 = P(1, 2),
-               p20 = P(2, 0), p21 = P(2, 1), p22 = P(2, 2);
-  for (std::int64_t k = rows.offsets[ip]; k < rows.offsets[ip + 1]; ++k) {
-    const auto node = static_cast<std::size_t>(nodes[k]);
-    const double* g = grads + 3 * k;
-    const double gx = g[0] + xi[3 * node], gy = g[1] + xi[3 * node + 1], gz = g[2] + xi[3 * node + 2];
-    double* fi = forces + 3 * node;
-    fi[0] += p00 * gx + p01 * gy + p02 * gz;
-    fi[1] += p10 * gx + p11 * gy + p12 * gz;
-    fi[2] += p20 * gx + p21 * gy + p22 * gz;
+}  // namespace
+
+void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index padding_node) {
+  block_offsets_.assign(supports.size() + 1, 0);
+  sizes_.resize(supports.size());
+  entries_ = 0;
+  for (std::size_t r = 0; r < supports.size(); ++r) {
+    sizes_[r] = static_cast<int>(supports[r].size());
+    entries_ += sizes_[r];
+    block_offsets_[r + 1] = block_offsets_[r] + (sizes_[r] + kBlock - 1) / kBlock;
   }
+  records_.assign(static_cast<std::size_t>(kBlock * blocks()), 4 * padding_node);
+  gradients_.assign(static_cast<std::size_t>(3 * kBlock * blocks()), 0.0);
+  for (std::size_t r = 0; r < supports.size(); ++r)
+    for (std::size_t k = 0; k < supports[r].size(); ++k)
+      records_[position(static_cast<Index>(r), static_cast<int>(k))] = 4 * supports[r][k];
 }
 
-}  // namespace
+void GradientRows::set_gradient(Index row, int k, const Vec3& gradient) {
+  const std::size_t at = position(row, k), block = at / kBlock, lane = at % kBlock;
+  for (int c = 0; c < 3; ++c) gradients_[(3 * block + c) * kBlock + lane] = gradient[c];
+}
+
+Vec3 GradientRows::gradient(Index row, int k) const {
+  const std::size_t at = position(row, k), block = at / kBlock, lane = at % kBlock;
+  const double* g = gradients_.data() + 3 * kBlock * block + lane;
+  return {g[0], g[kBlock], g[2 * kBlock]};
+}
 
 Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
              std::vector<std::shared_ptr<const Material>> region_materials, Options options)
@@ -91,11 +88,13 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   build_integration_points(options.integration_points_per_tet);
   build_supports();
   build_time_steps();
-  xi_.assign(3 * static_cast<std::size_t>(node_count()), 0.0);
+  const std::size_t padded = 4 * (static_cast<std::size_t>(node_count()) + 1);
+  xi_.assign(padded, 0.0);
   if (options.consistent_integration) build_integration_correction();
   if (options.nodal_volumetric_averaging) build_volumetric_averaging();
+  padded_u_.assign(padded, 0.0);
   thread_forces_.resize(static_cast<std::size_t>(omp_get_max_threads()));
-  for (auto& buffer : thread_forces_) buffer.assign(3 * static_cast<std::size_t>(node_count()), 0.0);
+  for (auto& buffer : thread_forces_) buffer.assign(padded, 0.0);
 }
 
 Model::~Model() = default;
@@ -131,8 +130,7 @@ void Model::build_integration_points(int points_per_tet) {
   }
 }
 
-void Model::build_rows(const std::vector<Vec3>& points, bool gradients, const char* what, SupportRows& rows,
-                       SupportStatistics* stats) const {
+std::vector<std::vector<Index>> Model::find_supports(const std::vector<Vec3>& points, const char* what) const {
   const int needed = shape_functions_->minimum_support_size();
   const Index n = static_cast<Index>(points.size());
   std::vector<std::vector<Index>> support(points.size());
@@ -159,16 +157,14 @@ void Model::build_rows(const std::vector<Vec3>& points, bool gradients, const ch
   }
   for (const auto& f : failures)
     if (f.row != std::numeric_limits<Index>::max()) throw InputError("/shape_function", f.message);
+  return support;
+}
 
-  rows.offsets.assign(points.size() + 1, 0);
-  for (Index r = 0; r < n; ++r) rows.offsets[r + 1] = rows.offsets[r] + static_cast<std::int64_t>(support[r].size());
-  const auto total = static_cast<std::size_t>(rows.offsets.back());
-  rows.nodes.resize(total);
-  if (gradients) {
-    rows.gradients.resize(3 * total);
-  } else {
-    rows.values.resize(total);
-  }
+template <class Store>
+double Model::evaluate_rows(const std::vector<Vec3>& points, const std::vector<std::vector<Index>>& supports,
+                            bool gradients, const char* what, Store store) const {
+  const Index n = static_cast<Index>(points.size());
+  std::vector<RowFailure> failures(static_cast<std::size_t>(omp_get_max_threads()));
   std::vector<double> min_condition(static_cast<std::size_t>(omp_get_max_threads()), 1.0);
 #pragma omp parallel
   {
@@ -178,7 +174,7 @@ void Model::build_rows(const std::vector<Vec3>& points, bool gradients, const ch
     double& condition = min_condition[static_cast<std::size_t>(omp_get_thread_num())];
 #pragma omp for schedule(static)
     for (Index r = 0; r < n; ++r) {
-      const auto& s = support[r];
+      const auto& s = supports[r];
       coordinates.resize(s.size());
       radii.resize(s.size());
       values.resize(s.size());
@@ -196,39 +192,48 @@ void Model::build_rows(const std::vector<Vec3>& points, bool gradients, const ch
             "coplanar (reciprocal condition {:.2g}). Increase /shape_function/support_dilatation (now {:g})",
             what, r, point_text(points[r]), s.size(), fit.reciprocal_condition, shape_functions_->support_dilatation());
       }
-      const auto start = static_cast<std::size_t>(rows.offsets[r]);
-      for (std::size_t k = 0; k < s.size(); ++k) {
-        rows.nodes[start + k] = s[k];
-        if (gradients) {
-          for (int d = 0; d < 3; ++d) rows.gradients[3 * (start + k) + d] = grads[k][d];
-        } else {
-          rows.values[start + k] = values[k];
-        }
-      }
+      for (std::size_t k = 0; k < s.size(); ++k)
+        store(r, static_cast<int>(k), values[k], gradients ? grads[k] : Vec3::Zero());
     }
   }
   for (const auto& f : failures)
     if (f.row != std::numeric_limits<Index>::max()) throw InputError("/shape_function", f.message);
-  if (stats != nullptr) {
-    stats->min = std::numeric_limits<Index>::max();
-    stats->max = 0;
-    for (Index r = 0; r < n; ++r) {
-      const auto size = static_cast<Index>(rows.size(r));
-      stats->min = std::min(stats->min, size);
-      stats->max = std::max(stats->max, size);
-    }
-    stats->mean = static_cast<double>(total) / std::max<Index>(n, 1);
-    stats->min_reciprocal_condition = *std::min_element(min_condition.begin(), min_condition.end());
-  }
+  return *std::min_element(min_condition.begin(), min_condition.end());
 }
 
 void Model::build_supports() {
-  build_rows(ip_position_, true, "integration point", ip_rows_, &ip_stats_);
-  build_rows(mesh_.points, false, "node", node_rows_, nullptr);
+  {
+    const auto supports = find_supports(ip_position_, "integration point");
+    ip_rows_.assign(supports, node_count());
+    ip_stats_.min_reciprocal_condition =
+        evaluate_rows(ip_position_, supports, true, "integration point",
+                      [&](Index r, int k, double, const Vec3& gradient) { ip_rows_.set_gradient(r, k, gradient); });
+    ip_stats_.min = std::numeric_limits<Index>::max();
+    ip_stats_.max = 0;
+    for (Index r = 0; r < ip_rows_.rows(); ++r) {
+      ip_stats_.min = std::min(ip_stats_.min, ip_rows_.size(r));
+      ip_stats_.max = std::max(ip_stats_.max, ip_rows_.size(r));
+    }
+    ip_stats_.mean = static_cast<double>(ip_rows_.entries()) / std::max<Index>(ip_rows_.rows(), 1);
+  }
+  {
+    const auto supports = find_supports(mesh_.points, "node");
+    node_rows_.offsets.assign(supports.size() + 1, 0);
+    for (std::size_t r = 0; r < supports.size(); ++r)
+      node_rows_.offsets[r + 1] = node_rows_.offsets[r] + static_cast<std::int64_t>(supports[r].size());
+    node_rows_.nodes.resize(static_cast<std::size_t>(node_rows_.offsets.back()));
+    node_rows_.values.resize(node_rows_.nodes.size());
+    for (std::size_t r = 0; r < supports.size(); ++r)
+      std::copy(supports[r].begin(), supports[r].end(), node_rows_.nodes.begin() + node_rows_.offsets[r]);
+    evaluate_rows(mesh_.points, supports, false, "node", [&](Index r, int k, double value, const Vec3&) {
+      node_rows_.values[static_cast<std::size_t>(node_rows_.offsets[r] + k)] = value;
+    });
+  }
 
   // Every node must carry mass: it must lie in the support of some integration point.
   std::vector<char> used(mesh_.points.size(), 0);
-  for (Index i : ip_rows_.nodes) used[i] = 1;
+  for (Index ip = 0; ip < ip_rows_.rows(); ++ip)
+    for (int k = 0; k < ip_rows_.size(ip); ++k) used[ip_rows_.node(ip, k)] = 1;
   for (std::size_t i = 0; i < used.size(); ++i) {
     if (!used[i])
       throw InputError("/shape_function",
@@ -244,8 +249,8 @@ void Model::build_time_steps() {
 #pragma omp parallel for schedule(static)
   for (Index ip = 0; ip < n; ++ip) {
     double sum = 0.0;
-    for (std::int64_t k = ip_rows_.offsets[ip]; k < ip_rows_.offsets[ip + 1]; ++k) {
-      const double* g = &ip_rows_.gradients[3 * k];
+    for (int k = 0; k < ip_rows_.size(ip); ++k) {
+      const Vec3 g = ip_rows_.gradient(ip, k);
       sum += g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
     }
     const Material& material = ip_material(ip);
@@ -274,15 +279,14 @@ void Model::build_integration_correction() {
       residual[node_rows_.nodes[e]] += node_rows_.values[e] * area[k];
   }
   for (Index ip = 0; ip < integration_point_count(); ++ip) {
-    for (std::int64_t k = ip_rows_.offsets[ip]; k < ip_rows_.offsets[ip + 1]; ++k) {
-      const Index node = ip_rows_.nodes[k];
-      const double* g = &ip_rows_.gradients[3 * k];
-      residual[node] -= ip_weight_[ip] * Vec3(g[0], g[1], g[2]);
+    for (int k = 0; k < ip_rows_.size(ip); ++k) {
+      const Index node = ip_rows_.node(ip, k);
+      residual[node] -= ip_weight_[ip] * ip_rows_.gradient(ip, k);
       weight[node] += ip_weight_[ip];
     }
   }
   for (Index i = 0; i < node_count(); ++i)
-    for (int d = 0; d < 3; ++d) xi_[3 * static_cast<std::size_t>(i) + d] = residual[i][d] / weight[i];
+    for (int d = 0; d < 3; ++d) xi_[4 * static_cast<std::size_t>(i) + d] = residual[i][d] / weight[i];
 }
 
 std::vector<double> Model::lumped_mass(std::span<const double> density_scale) const {
@@ -290,44 +294,76 @@ std::vector<double> Model::lumped_mass(std::span<const double> density_scale) co
   for (Index ip = 0; ip < integration_point_count(); ++ip) {
     const double scale = density_scale.empty() ? 1.0 : density_scale[ip];
     const double share = scale * ip_material(ip).density() * ip_weight_[ip] / static_cast<double>(ip_rows_.size(ip));
-    for (std::int64_t k = ip_rows_.offsets[ip]; k < ip_rows_.offsets[ip + 1]; ++k) mass[ip_rows_.nodes[k]] += share;
+    for (int k = 0; k < ip_rows_.size(ip); ++k) mass[ip_rows_.node(ip, k)] += share;
   }
   return mass;
 }
 
-Mat3 Model::deformation_gradient(Index ip, std::span<const double> u) const { return gather_F(ip_rows_, ip, u.data()); }
+Mat3 Model::deformation_gradient(Index ip, std::span<const double> u) const {
+  return deformation_gradient_at(ip_rows_, ip, u.data());
+}
+
+// Called inside a parallel region.
+void Model::pad_displacement(std::span<const double> u) const {
+#pragma omp for schedule(static)
+  for (Index i = 0; i < node_count(); ++i)
+    for (std::size_t c = 0; c < 3; ++c) padded_u_[4 * static_cast<std::size_t>(i) + c] = u[3 * static_cast<std::size_t>(i) + c];
+}
 
 // Called inside a parallel region: sums the per-thread buffers in a fixed order, each thread its own slice.
 void Model::reduce_thread_forces(std::span<double> f) const {
   const auto team = static_cast<std::size_t>(omp_get_num_threads());
 #pragma omp for schedule(static)
-  for (std::size_t i = 0; i < f.size(); ++i) {
-    double sum = 0.0;
-    for (std::size_t t = 0; t < team; ++t) sum += thread_forces_[t][i];
-    f[i] = sum;
+  for (Index i = 0; i < node_count(); ++i)
+    for (std::size_t c = 0; c < 3; ++c) {
+      double sum = 0.0;
+      for (std::size_t t = 0; t < team; ++t) sum += thread_forces_[t][4 * static_cast<std::size_t>(i) + c];
+      f[3 * static_cast<std::size_t>(i) + c] = sum;
+    }
+}
+
+// The forces of integration points begin .. end - 1 into f4, in batches of consecutive points with one
+// material. Returns the first inadmissible point, or the largest Index.
+Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
+  constexpr int kCapacity = StressBatch::kCapacity;
+  Index first_bad = std::numeric_limits<Index>::max();
+  StressBatch batch{};
+  double P[9][kCapacity];
+  double weights[kCapacity];
+  bool skip[kCapacity];
+  for (Index first = begin; first < end; first += batch.count) {
+    const std::uint16_t material = ip_material_[first];
+    int count = 1;
+    while (count < kCapacity && first + count < end && ip_material_[first + count] == material) ++count;
+    batch.count = count;
+    force_kernel::gather(ip_rows_, padded_u_.data(), first, batch);
+    materials_[material]->stress_batch(batch);
+    for (int p = 0; p < kCapacity; ++p) {
+      weights[p] = p < count ? ip_weight_[first + p] : 0.0;
+      skip[p] = p < count && !batch.admissible[p];
+      if (skip[p]) first_bad = std::min(first_bad, first + p);
+    }
+    force_kernel::first_piola(batch, weights, P);
+    force_kernel::scatter(ip_rows_, xi_.data(), first, count, P, skip, f4);
   }
+  return first_bad;
 }
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
   if (averaging_.enabled) return internal_forces_averaged(u, f);
-  const Index n = integration_point_count();
+  const std::int64_t n = integration_point_count();
   Index first_bad = std::numeric_limits<Index>::max();
   // The team is the one the per-thread buffers were sized for, whatever a plugin did to OpenMP since.
 #pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
   {
-    std::vector<double>& local = thread_forces_[static_cast<std::size_t>(omp_get_thread_num())];
+    const std::int64_t thread = omp_get_thread_num(), team = omp_get_num_threads();
+    AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
     std::fill(local.begin(), local.end(), 0.0);
-#pragma omp for schedule(static)
-    for (Index ip = 0; ip < n; ++ip) {
-      const Mat3 F = gather_F(ip_rows_, ip, u.data());
-      Mat3 S;
-      if (!ip_material(ip).stress(F, S)) {
-        first_bad = std::min(first_bad, ip);
-        continue;
-      }
-      // first Piola-Kirchhoff stress times the weight
-      scatter_stress(ip_rows_, xi_.data(), ip, ip_weight_[ip] * (F * S), local.data());
-    }
+    pad_displacement(u);  // ends with a barrier
+    // Contiguous ranges, so that each thread's batches are consecutive points.
+    first_bad = std::min(first_bad, accumulate_forces(static_cast<Index>(n * thread / team),
+                                                      static_cast<Index>(n * (thread + 1) / team), local.data()));
+#pragma omp barrier
     reduce_thread_forces(f);
   }
   return first_bad == std::numeric_limits<Index>::max() ? -1 : first_bad;
@@ -367,20 +403,29 @@ void Model::averaged_dilatation(std::span<const double> u, Index& first_bad_poin
   const VolumetricAveraging& a = averaging_;
   const Index n = integration_point_count();
   Index first_bad = first_bad_point;
+  const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
 #pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
   {
+    pad_displacement(u);
+    StressBatch batch{};
 #pragma omp for schedule(static)
-    for (Index ip = 0; ip < n; ++ip) {
-      const Mat3 F = gather_F(ip_rows_, ip, u.data());
-      const double J = F.determinant();
-      a.local_stress[ip] = F;
-      a.J[ip] = J;
-      if (!(J > 0.0) || !std::isfinite(J) || !F.allFinite()) {
-        first_bad = std::min(first_bad, ip);
-        a.cofactor[ip].setZero();
-        continue;
+    for (Index b = 0; b < batches; ++b) {
+      const Index first = b * StressBatch::kCapacity;
+      batch.count = std::min<Index>(StressBatch::kCapacity, n - first);
+      force_kernel::gather(ip_rows_, padded_u_.data(), first, batch);
+      for (int p = 0; p < batch.count; ++p) {
+        const Index ip = first + p;
+        const Mat3 F = batch.deformation_gradient(p);
+        const double J = F.determinant();
+        a.local_stress[ip] = F;
+        a.J[ip] = J;
+        if (!(J > 0.0) || !std::isfinite(J) || !F.allFinite()) {
+          first_bad = std::min(first_bad, ip);
+          a.cofactor[ip].setZero();
+          continue;
+        }
+        a.cofactor[ip] = J * F.inverse().transpose();
       }
-      a.cofactor[ip] = J * F.inverse().transpose();
     }
 #pragma omp for schedule(static)
     for (Index node = 0; node < node_count(); ++node) {
@@ -422,6 +467,8 @@ Index Model::internal_forces_averaged(std::span<const double> u, std::span<doubl
       if (!ip_material(ip).stress(F_bar, S)) {
         first_bad = std::min(first_bad, ip);
         a.pressure[ip] = 0.0;
+        a.local_stress[ip].setZero();
+        a.cofactor[ip].setZero();
         continue;
       }
       const Mat3 P_bar = F_bar * S;
@@ -436,15 +483,23 @@ Index Model::internal_forces_averaged(std::span<const double> u, std::span<doubl
         sum += a.pressure[a.node_points.nodes[k]];
       a.node_value[node] = 0.25 * sum / a.node_weight[node];
     }
-    std::vector<double>& local = thread_forces_[static_cast<std::size_t>(omp_get_thread_num())];
+    AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(omp_get_thread_num())];
     std::fill(local.begin(), local.end(), 0.0);
+    const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
+    double P[9][StressBatch::kCapacity];
+    const bool skip[StressBatch::kCapacity] = {};
 #pragma omp for schedule(static)
-    for (Index ip = 0; ip < n; ++ip) {
-      const auto& tet = mesh_.tets[ip_tet_[ip]];
-      const double pressure =
-          a.node_value[tet[0]] + a.node_value[tet[1]] + a.node_value[tet[2]] + a.node_value[tet[3]];
-      scatter_stress(ip_rows_, xi_.data(), ip, a.local_stress[ip] + (ip_weight_[ip] * pressure) * a.cofactor[ip],
-                     local.data());
+    for (Index b = 0; b < batches; ++b) {
+      const Index first = b * StressBatch::kCapacity;
+      const int count = std::min<Index>(StressBatch::kCapacity, n - first);
+      for (int p = 0; p < count; ++p) {
+        const auto& tet = mesh_.tets[ip_tet_[first + p]];
+        const double pressure =
+            a.node_value[tet[0]] + a.node_value[tet[1]] + a.node_value[tet[2]] + a.node_value[tet[3]];
+        const Mat3 stress = a.local_stress[first + p] + (ip_weight_[first + p] * pressure) * a.cofactor[first + p];
+        for (int c = 0; c < 9; ++c) P[c][p] = stress(c / 3, c % 3);
+      }
+      force_kernel::scatter(ip_rows_, xi_.data(), first, count, P, skip, local.data());
     }
     reduce_thread_forces(f);
   }

@@ -171,7 +171,7 @@ class RigidContactNeedle final : public NeedleModel {
     for (Index ip = 0; ip < model.integration_point_count(); ++ip) {
       const double share = model.ip_material(ip).density() * model.ip_weights()[ip] /
                            (static_cast<double>(rows.size(ip)) * dt[ip] * dt[ip]);
-      for (std::int64_t k = rows.offsets[ip]; k < rows.offsets[ip + 1]; ++k) node_stiffness_[rows.nodes[k]] += share;
+      for (int k = 0; k < rows.size(ip); ++k) node_stiffness_[rows.node(ip, k)] += share;
     }
 
     // Footprint: surface nodes at the entry within the footprint radius of the axis (at least the nearest).

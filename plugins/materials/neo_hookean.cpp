@@ -8,6 +8,7 @@
 #include "hyperelastic.hpp"
 #include "mtled/interfaces/material.hpp"
 #include "mtled/plugin.hpp"
+#include "stress_batch.hpp"
 
 namespace mtled {
 
@@ -42,6 +43,10 @@ class NeoHookeanMaterial final : public Material {
     if (!result.allFinite()) return false;  // an F so extreme that S overflows
     S = result;
     return true;
+  }
+
+  void stress_batch(StressBatch& batch) const noexcept override {
+    hyperelastic::neo_hookean_stress_batch({mu_, volumetric_.bulk_modulus()}, batch);
   }
 
   double energy(const Mat3& F) const noexcept override {

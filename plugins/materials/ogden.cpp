@@ -15,6 +15,7 @@
 #include "hyperelastic.hpp"
 #include "mtled/interfaces/material.hpp"
 #include "mtled/plugin.hpp"
+#include "stress_batch.hpp"
 #include "symmetric_eigen3.hpp"
 
 namespace mtled {
@@ -72,6 +73,10 @@ class OgdenMaterial final : public Material {
     if (!result.allFinite()) return false;
     S = result;
     return true;
+  }
+
+  void stress_batch(StressBatch& batch) const noexcept override {
+    hyperelastic::ogden_stress_batch({half_alpha_, stress_factor_, volumetric_.bulk_modulus()}, batch);
   }
 
   double energy(const Mat3& F) const noexcept override {

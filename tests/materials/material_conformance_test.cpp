@@ -16,8 +16,11 @@
 #include <random>
 #include <thread>
 
+#include <Eigen/SVD>
+
 #include "material_test_support.hpp"
 #include "mtled/interfaces/material.hpp"
+#include "simd_targets.hpp"
 #include "test_support.hpp"
 
 // Counts every allocation through operator new in this executable and the plugins it loads (a plugin's
@@ -331,6 +334,57 @@ TEST_P(MaterialConformance, ConcurrentEvaluationGivesTheSameResults) {
   second.join();
   EXPECT_EQ(mismatches[0], 0);
   EXPECT_EQ(mismatches[1], 0);
+}
+
+// stress_batch() is what the force kernel calls: a vectorised law must agree with its one-point stress() on
+// every instruction set the CPU has and on the portable baseline, in every lane: the admissible set (equal and
+// nearly equal stretches included), the identity, refused F, and extreme F, mixed within one batch so that a
+// refused lane cannot spoil its neighbours. Bound: the two compute the same formulas with different roundings
+// (fused multiply-adds, a vectorised exp/log/acos/cos accurate to a few ulp): a few hundred roundings of M, times
+// the condition number of C (the smallest eigenvalue of C carries an absolute error of about eps |C|, and the
+// stress divides by it: 1 to 16 over the admissible set, 1e6 for the stretch of 1e-3).
+TEST_P(MaterialConformance, BatchedStressEqualsOnePointStress) {
+  const auto material = make();
+  const double M = material->p_wave_modulus();
+  std::vector<Mat3> deformations;
+  for (const auto& named : test::admissible_deformations()) deformations.push_back(named.F);
+  std::mt19937 random(17);
+  deformations.push_back(Mat3::Identity());
+  deformations.push_back(-Mat3::Identity());
+  deformations.push_back(test::from_stretches(test::random_rotation(random), Vec3(1e-3, 1.0, 1.0), test::random_rotation(random)));
+  deformations.push_back(Mat3::Constant(std::numeric_limits<double>::quiet_NaN()));
+  deformations.push_back(Vec3(1.0, 1.0, 0.0).asDiagonal());
+  deformations.push_back(test::from_stretches(test::random_rotation(random), Vec3(1e-100, 1e50, 1e50), test::random_rotation(random)));
+  test::for_each_simd_target([&](const std::string& target) {
+    SCOPED_TRACE(target);
+    double worst = 0.0;
+    for (std::size_t first = 0; first < deformations.size(); first += StressBatch::kCapacity) {
+      StressBatch batch;
+      batch.count = static_cast<int>(std::min<std::size_t>(StressBatch::kCapacity, deformations.size() - first));
+      for (int p = 0; p < StressBatch::kCapacity; ++p) {
+        const Mat3 F = p < batch.count ? deformations[first + p] : Mat3::Identity();
+        for (int c = 0; c < 9; ++c) batch.F[c][p] = F(c / 3, c % 3);
+      }
+      material->stress_batch(batch);
+      for (int p = 0; p < batch.count; ++p) {
+        const Mat3& F = deformations[first + p];
+        SCOPED_TRACE(::testing::Message() << "F =\n" << F);
+        Mat3 S;
+        const bool admissible = material->stress(F, S);
+        ASSERT_EQ(batch.admissible[p], admissible);
+        if (!admissible) continue;
+        Mat3 S_batch;
+        for (int c = 0; c < 9; ++c) S_batch(c / 3, c % 3) = batch.S[c][p];
+        const Vec3 singular = Eigen::JacobiSVD<Mat3>(F).singularValues();
+        const double condition = std::pow(singular.maxCoeff() / singular.minCoeff(), 2);
+        const double error = (S_batch - S).cwiseAbs().maxCoeff() / std::max(M, S.cwiseAbs().maxCoeff());
+        worst = std::max(worst, error / condition);
+        EXPECT_LE(error, 256 * kEpsilon * condition) << "batched\n" << S_batch << "\none point\n" << S;
+      }
+    }
+    std::cout << GetParam() << " on " << target << ": max |S_batch - S| / (max(M, |S|) cond(C)) = " << worst / kEpsilon
+              << " eps\n";
+  });
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryMaterial, MaterialConformance, ::testing::ValuesIn(material_names()),

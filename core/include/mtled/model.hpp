@@ -2,7 +2,8 @@
 // The meshless discretisation of MTLED: field nodes at the mesh vertices, integration points in the
 // background tets, MLS-type shape functions on node-centred supports (R_I = d_c x mean edge length at I),
 // all in the reference configuration (Total Lagrangian: computed once). Shape-function gradients and
-// support lists are stored contiguously, one row per integration point (CSR).
+// support lists are stored contiguously, one row per integration point, in blocks the vectorised force kernel
+// streams (GradientRows).
 #include <memory>
 #include <span>
 #include <string>
@@ -19,11 +20,46 @@ namespace mtled {
 struct SupportRows {
   std::vector<std::int64_t> offsets;
   std::vector<Index> nodes;
-  std::vector<double> values;     // N_I at the row's point (empty when not stored)
-  std::vector<double> gradients;  // dN_I/dX, 3 per entry (empty when not stored)
+  std::vector<double> values;  // N_I at the row's point (empty when not stored)
 
   Index rows() const { return offsets.empty() ? 0 : static_cast<Index>(offsets.size() - 1); }
   std::int64_t size(Index row) const { return offsets[row + 1] - offsets[row]; }
+};
+
+// Shape-function gradients at the integration points, laid out for the force kernel: row r holds blocks
+// block_begin(r) .. block_end(r) - 1 of kBlock entries each; a block holds its entries' record offsets (4 x the
+// node index: the kernel's per-node arrays have 4 doubles per node), then the x, the y and the z gradient
+// components of its entries, each contiguous (structure of arrays), so one SIMD load reads one component of
+// several entries. A row's last block is padded with zero gradients on the padding node (the node count: one
+// past the last node), which the kernel's per-node arrays carry as a zero-displacement sink.
+class GradientRows {
+ public:
+  static constexpr int kBlock = 4;
+
+  // One row per support list; gradients zero until set.
+  void assign(const std::vector<std::vector<Index>>& supports, Index padding_node);
+  void set_gradient(Index row, int k, const Vec3& gradient);
+
+  Index rows() const { return static_cast<Index>(sizes_.size()); }
+  int size(Index row) const { return sizes_[row]; }  // entries, padding excluded
+  std::int64_t entries() const { return entries_; }   // all rows, padding excluded
+  Index node(Index row, int k) const { return records_[position(row, k)] / 4; }
+  Vec3 gradient(Index row, int k) const;
+
+  std::int64_t block_begin(Index row) const { return block_offsets_[row]; }
+  std::int64_t block_end(Index row) const { return block_offsets_[row + 1]; }
+  const Index* block_records(std::int64_t block) const { return records_.data() + kBlock * block; }
+  const double* block_gradients(std::int64_t block) const { return gradients_.data() + 3 * kBlock * block; }
+  std::int64_t blocks() const { return block_offsets_.empty() ? 0 : block_offsets_.back(); }
+
+ private:
+  std::size_t position(Index row, int k) const { return static_cast<std::size_t>(kBlock * block_offsets_[row] + k); }
+
+  std::vector<std::int64_t> block_offsets_;
+  std::vector<int> sizes_;
+  std::int64_t entries_ = 0;
+  AlignedVector<Index> records_;
+  AlignedVector<double> gradients_;
 };
 
 struct SupportStatistics {
@@ -70,7 +106,7 @@ class Model {
   const std::vector<double>& ip_weights() const { return ip_weight_; }
   const std::vector<Index>& ip_tets() const { return ip_tet_; }
   const Material& ip_material(Index ip) const { return *materials_[ip_material_[ip]]; }
-  const SupportRows& ip_supports() const { return ip_rows_; }       // gradients
+  const GradientRows& ip_supports() const { return ip_rows_; }      // gradients
   const SupportRows& node_interpolation() const { return node_rows_; }  // values at the nodes
   SupportStatistics ip_support_statistics() const { return ip_stats_; }
 
@@ -81,9 +117,11 @@ class Model {
   // dt = 2 / (c sqrt(n sum_I |grad N_I|^2)), c = sqrt((lambda + 2 mu) / rho).
   const std::vector<double>& ip_critical_time_steps() const { return ip_dt_; }
 
-  // Per-node correction of the test-function gradients (3 per node; zeros when consistent integration is
-  // off). The internal force uses grad N_I + xi_I.
-  const std::vector<double>& gradient_correction() const { return xi_; }
+  // Per-node correction xi_I of the test-function gradients (zero when consistent integration is off).
+  Vec3 gradient_correction(Index node) const {
+    const double* xi = xi_.data() + 4 * static_cast<std::size_t>(node);
+    return {xi[0], xi[1], xi[2]};
+  }
 
   // Internal nodal forces f_I = sum_ip w F S (grad N_I + xi_I) for nodal parameters u (3 per node). Returns -1, or
   // the lowest-numbered integration point whose F is inadmissible (J <= 0 or not finite); f is then
@@ -111,10 +149,17 @@ class Model {
   // then J_bar at every integration point.
   void averaged_dilatation(std::span<const double> u, Index& first_bad) const;
   Index internal_forces_averaged(std::span<const double> u, std::span<double> f) const;
+  // Copies u into the padded per-node layout the kernel gathers from (4 per node, then the padding node's zeros).
+  void pad_displacement(std::span<const double> u) const;
+  Index accumulate_forces(Index begin, Index end, double* f4) const;
   void reduce_thread_forces(std::span<double> f) const;
-  // Support rows (values, or values and gradients) at arbitrary points; throws InputError naming `what`.
-  void build_rows(const std::vector<Vec3>& points, bool gradients, const char* what, SupportRows& rows,
-                  SupportStatistics* stats) const;
+  // Support lists of arbitrary points (at least the shape functions' minimum); throws InputError naming `what`.
+  std::vector<std::vector<Index>> find_supports(const std::vector<Vec3>& points, const char* what) const;
+  // Shape functions at the points on those supports: store(r, k, value, gradient) for each entry, gradients only
+  // when asked for; returns the smallest reciprocal condition number of the fits.
+  template <class Store>
+  double evaluate_rows(const std::vector<Vec3>& points, const std::vector<std::vector<Index>>& supports,
+                       bool gradients, const char* what, Store store) const;
 
   TetMesh mesh_;
   std::shared_ptr<const ShapeFunctions> shape_functions_;
@@ -130,13 +175,15 @@ class Model {
   std::vector<double> ip_weight_;
   std::vector<Index> ip_tet_;
   std::vector<std::uint16_t> ip_material_;
-  SupportRows ip_rows_;
+  GradientRows ip_rows_;
   SupportRows node_rows_;
   SupportStatistics ip_stats_;
   std::vector<double> ip_dt_;
-  std::vector<double> xi_;
-
-  mutable std::vector<std::vector<double>> thread_forces_;
+  // The force kernel's per-node arrays, 4 doubles per node (x, y, z, 0) and one padding node of zeros: the
+  // gradient correction, the displacement being evaluated, and one force accumulator per thread.
+  AlignedVector<double> xi_;
+  mutable AlignedVector<double> padded_u_;
+  mutable std::vector<AlignedVector<double>> thread_forces_;
 
   // Nodal volumetric averaging: allocated only when the scene asks for it.
   struct VolumetricAveraging {

@@ -1,0 +1,182 @@
+// The force kernel's vectorised parts (force_kernel.hpp). Compiled once per instruction set by
+// hwy/foreach_target.h, which re-includes this file; HWY_DYNAMIC_DISPATCH picks the CPU's best at run time.
+//
+// Vectors of (at most) 4 doubles, one lane per support entry of a row. On AVX2 and AVX-512 a node's record
+// (x, y, z, 0) is one such vector: the displacements and gradient corrections of 4 entries are read as 4 loads
+// and a transpose, and their forces added back as a transpose and 4 read-modify-writes, which is faster than
+// the gather and scatter instructions (and AVX2 has no scatter); 512-bit vectors would not be faster here, since
+// the wider cores split them in two halves anyway. Narrower targets gather and add lane by lane.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "force_kernel.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include "force_kernel.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace mtled::HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+using D = hn::CappedTag<double, GradientRows::kBlock>;
+using V = hn::Vec<D>;
+constexpr int kBlock = GradientRows::kBlock;
+
+#if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX3_DL
+static_assert(hn::MaxLanes(D()) == 4);
+
+// (x, y, z) of the entries' node records (at base + offsets[e]), one lane each.
+HWY_INLINE void load_records(D d, const double* base, const Index* offsets, V& x, V& y, V& z) {
+  {
+    const auto a = hn::Load(d, base + offsets[0]);
+    const auto b = hn::Load(d, base + offsets[1]);
+    const auto c = hn::Load(d, base + offsets[2]);
+    const auto e = hn::Load(d, base + offsets[3]);
+    const auto ab_even = hn::InterleaveLower(a, b), ab_odd = hn::InterleaveUpper(d, a, b);
+    const auto ce_even = hn::InterleaveLower(c, e), ce_odd = hn::InterleaveUpper(d, c, e);
+    x = hn::ConcatLowerLower(d, ce_even, ab_even);
+    y = hn::ConcatLowerLower(d, ce_odd, ab_odd);
+    z = hn::ConcatUpperUpper(d, ce_even, ab_even);
+  }
+}
+
+// The entries' node records (at base + offsets[e]) += (x, y, z) of each lane.
+HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double* base) {
+  {
+    const auto zero = hn::Zero(d);
+    const auto xy_even = hn::InterleaveLower(x, y), xy_odd = hn::InterleaveUpper(d, x, y);
+    const auto z_even = hn::InterleaveLower(z, zero), z_odd = hn::InterleaveUpper(d, z, zero);
+    const V entry[4] = {hn::ConcatLowerLower(d, z_even, xy_even), hn::ConcatLowerLower(d, z_odd, xy_odd),
+                                   hn::ConcatUpperUpper(d, z_even, xy_even), hn::ConcatUpperUpper(d, z_odd, xy_odd)};
+    for (int e = 0; e < 4; ++e) {
+      double* record = base + offsets[e];
+      hn::Store(hn::Add(hn::Load(d, record), entry[e]), d, record);
+    }
+  }
+}
+
+// The lane sums of f[0..8]: four at a time by a transpose and two additions instead of nine reductions.
+HWY_INLINE void sum_lanes(D d, const V (&f)[9], double (&sums)[9]) {
+  for (int first = 0; first < 8; first += 4) {
+    const V a = f[first], b = f[first + 1], c = f[first + 2], e = f[first + 3];
+    const V ab = hn::Add(hn::InterleaveLower(a, b), hn::InterleaveUpper(d, a, b));  // a0+a1 b0+b1 a2+a3 b2+b3
+    const V ce = hn::Add(hn::InterleaveLower(c, e), hn::InterleaveUpper(d, c, e));
+    hn::StoreU(hn::Add(hn::ConcatLowerLower(d, ce, ab), hn::ConcatUpperUpper(d, ce, ab)), d, sums + first);
+  }
+  sums[8] = hn::GetLane(hn::SumOfLanes(d, f[8]));
+}
+#else
+HWY_INLINE void sum_lanes(D d, const V (&f)[9], double (&sums)[9]) {
+  for (int c = 0; c < 9; ++c) sums[c] = hn::GetLane(hn::SumOfLanes(d, f[c]));
+}
+
+HWY_INLINE void load_records(D d, const double* base, const Index* offsets, V& x, V& y, V& z) {
+  const hn::RebindToSigned<D> di;
+  const hn::Rebind<std::int32_t, D> d32;
+  const auto index = hn::PromoteTo(di, hn::LoadU(d32, offsets));
+  x = hn::GatherIndex(d, base, index);
+  y = hn::GatherIndex(d, base + 1, index);
+  z = hn::GatherIndex(d, base + 2, index);
+}
+
+HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double* base) {
+  double lanes[3][hn::MaxLanes(D())];
+  hn::StoreU(x, d, lanes[0]);
+  hn::StoreU(y, d, lanes[1]);
+  hn::StoreU(z, d, lanes[2]);
+  for (std::size_t e = 0; e < hn::Lanes(d); ++e) {
+    double* record = base + offsets[e];
+    for (int i = 0; i < 3; ++i) record[i] += lanes[i][e];
+  }
+}
+#endif
+
+void Gather(const GradientRows& rows, const double* u4, Index first, StressBatch& batch) {
+  const D d;
+  constexpr double kIdentity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (int p = 0; p < StressBatch::kCapacity; ++p) {
+    if (p >= batch.count) {
+      for (int c = 0; c < 9; ++c) batch.F[c][p] = kIdentity[c];
+      continue;
+    }
+    // One accumulator per component of F, one lane per support entry; the padding entries add 0 x 0.
+    V f[9];
+    for (auto& v : f) v = hn::Zero(d);
+    // Raw pointers in locals: the compiler cannot tell that the stores do not move the rows' arrays.
+    const std::int64_t blocks = rows.block_end(first + p) - rows.block_begin(first + p);
+    const double* g = rows.block_gradients(rows.block_begin(first + p));
+    const Index* records = rows.block_records(rows.block_begin(first + p));
+    for (std::int64_t b = 0; b < blocks; ++b, g += 3 * kBlock, records += kBlock) {
+      for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
+        V u[3];
+        load_records(d, u4, records + j, u[0], u[1], u[2]);
+        const V grad[3] = {hn::Load(d, g + j), hn::Load(d, g + kBlock + j), hn::Load(d, g + 2 * kBlock + j)};
+        for (int i = 0; i < 3; ++i)
+          for (int k = 0; k < 3; ++k) f[3 * i + k] = hn::MulAdd(u[i], grad[k], f[3 * i + k]);
+      }
+    }
+    double sums[9];
+    sum_lanes(d, f, sums);
+    for (int c = 0; c < 9; ++c) batch.F[c][p] = kIdentity[c] + sums[c];
+  }
+}
+
+void FirstPiola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]) {
+  const hn::ScalableTag<double> d;
+  for (int p = 0; p < StressBatch::kCapacity; p += static_cast<int>(hn::Lanes(d))) {
+    const auto w = hn::LoadU(d, weights + p);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        auto sum = hn::Mul(hn::Load(d, &batch.F[3 * i][p]), hn::Load(d, &batch.S[j][p]));
+        sum = hn::MulAdd(hn::Load(d, &batch.F[3 * i + 1][p]), hn::Load(d, &batch.S[3 + j][p]), sum);
+        sum = hn::MulAdd(hn::Load(d, &batch.F[3 * i + 2][p]), hn::Load(d, &batch.S[6 + j][p]), sum);
+        hn::Store(hn::Mul(w, sum), d, &P[3 * i + j][p]);
+      }
+  }
+}
+
+void Scatter(const GradientRows& rows, const double* xi4, Index first, int count,
+             const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
+  const D d;
+  for (int p = 0; p < count; ++p) {
+    if (skip[p]) continue;
+    V stress[9];
+    for (int c = 0; c < 9; ++c) stress[c] = hn::Set(d, P[c][p]);
+    const std::int64_t blocks = rows.block_end(first + p) - rows.block_begin(first + p);
+    const double* g = rows.block_gradients(rows.block_begin(first + p));
+    const Index* records = rows.block_records(rows.block_begin(first + p));
+    for (std::int64_t b = 0; b < blocks; ++b, g += 3 * kBlock, records += kBlock) {
+      for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
+        V grad[3];
+        load_records(d, xi4, records + j, grad[0], grad[1], grad[2]);
+        for (int k = 0; k < 3; ++k) grad[k] = hn::Add(hn::Load(d, g + k * kBlock + j), grad[k]);
+        V force[3];
+        for (int i = 0; i < 3; ++i)
+          force[i] = hn::MulAdd(stress[3 * i + 2], grad[2],
+                                hn::MulAdd(stress[3 * i + 1], grad[1], hn::Mul(stress[3 * i], grad[0])));
+        add_to_records(d, force[0], force[1], force[2], records + j, f4);
+      }
+    }
+  }
+}
+
+}  // namespace mtled::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace mtled::force_kernel {
+HWY_EXPORT(Gather);
+HWY_EXPORT(FirstPiola);
+HWY_EXPORT(Scatter);
+
+void gather(const GradientRows& rows, const double* u4, Index first, StressBatch& batch) {
+  HWY_DYNAMIC_DISPATCH(Gather)(rows, u4, first, batch);
+}
+void first_piola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]) {
+  HWY_DYNAMIC_DISPATCH(FirstPiola)(batch, weights, P);
+}
+void scatter(const GradientRows& rows, const double* xi4, Index first, int count,
+             const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
+  HWY_DYNAMIC_DISPATCH(Scatter)(rows, xi4, first, count, P, skip, f4);
+}
+}  // namespace mtled::force_kernel
+#endif

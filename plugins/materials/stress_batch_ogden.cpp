@@ -1,0 +1,59 @@
+// Ogden stress for a batch of integration points (stress_batch.hpp), lane by lane the arithmetic of
+// OgdenMaterial::stress() in ogden.cpp: principal stretches from the eigen decomposition of C, then
+//   S_i = (a + b' J^(-alpha/3) lambda_i^alpha) / lambda_i^2,  b' = 2 mu / alpha,
+//   a = (2/D) J (J - 1) - b' sum_j J^(-alpha/3) lambda_j^alpha / 3,
+// with the powers as exp((alpha/2) (log lambda_i^2 - (2/3) log J)): one log per stretch and one exp instead of
+// a pow and a cube root.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "stress_batch_ogden.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include "hyperelastic_simd-inl.h"
+#include "stress_batch.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace mtled::HWY_NAMESPACE {
+
+void OgdenStressBatch(const hyperelastic::OgdenConstants& k, StressBatch& batch) {
+  const DoubleTag d;
+  const DoubleVec third = hn::Set(d, 1.0 / 3.0), two_thirds = hn::Set(d, 2.0 / 3.0);
+  const DoubleVec half_alpha = hn::Set(d, k.half_alpha), stress_factor = hn::Set(d, k.stress_factor);
+  for (int p = 0; p < StressBatch::kCapacity; p += static_cast<int>(hn::Lanes(d))) {
+    const Mat3V F = load_matrix(d, batch.F, p);
+    const DoubleVec J = determinant(F);
+    DoubleMask ok = admissible(d, F, J);
+    const DoubleVec safe_J = hn::IfThenElse(ok, J, hn::Set(d, 1.0));  // no log of J <= 0 in refused lanes
+    const SymmetricEigen3V principal = symmetric_eigen3(d, right_cauchy_green(F));
+    const DoubleVec log_J = hn::Log(d, safe_J);
+    DoubleVec isochoric[3], sum = hn::Zero(d);
+    for (int i = 0; i < 3; ++i) {
+      // A round-off eigenvalue <= 0 gives NaN here and a refused lane below, as in the one-point code.
+      isochoric[i] = hn::Exp(d, hn::Mul(half_alpha, hn::NegMulAdd(two_thirds, log_J, hn::Log(d, principal.values[i]))));
+      sum = hn::Add(sum, isochoric[i]);
+    }
+    const DoubleVec J_dU_dJ = hn::Mul(hn::Mul(hn::Set(d, k.two_over_D), safe_J), hn::Sub(safe_J, hn::Set(d, 1.0)));
+    const DoubleVec a = hn::NegMulAdd(stress_factor, hn::Mul(sum, third), J_dU_dJ);
+    DoubleVec principal_stress[3];
+    for (int i = 0; i < 3; ++i)
+      principal_stress[i] = hn::Div(hn::MulAdd(stress_factor, isochoric[i], a), principal.values[i]);
+    const Mat3V S = spectral_sum(principal, principal_stress);
+    // Not finite: an F so extreme that C has a round-off eigenvalue <= 0 or S overflows.
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) ok = hn::And(ok, hn::Eq(hn::Sub(S.m[i][j], S.m[i][j]), hn::Zero(d)));
+    store_symmetric(d, zero_unless(ok, S), batch.S, p);
+    store_admissible(d, ok, batch.admissible, p);
+  }
+}
+
+}  // namespace mtled::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace mtled::hyperelastic {
+HWY_EXPORT(OgdenStressBatch);
+void ogden_stress_batch(const OgdenConstants& constants, StressBatch& batch) noexcept {
+  HWY_DYNAMIC_DISPATCH(OgdenStressBatch)(constants, batch);
+}
+}  // namespace mtled::hyperelastic
+#endif
