@@ -164,6 +164,15 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace mtled::force_kernel {
+void prefetch(const GradientRows& rows, Index begin, Index end) {
+  const auto* g = reinterpret_cast<const char*>(rows.block_gradients(rows.block_begin(begin)));
+  const auto* g_end = reinterpret_cast<const char*>(rows.block_gradients(rows.block_begin(end)));
+  for (; g < g_end; g += 64) __builtin_prefetch(g);
+  const auto* r = reinterpret_cast<const char*>(rows.block_records(rows.block_begin(begin)));
+  const auto* r_end = reinterpret_cast<const char*>(rows.block_records(rows.block_begin(end)));
+  for (; r < r_end; r += 64) __builtin_prefetch(r);
+}
+
 HWY_EXPORT(Gather);
 HWY_EXPORT(FirstPiola);
 HWY_EXPORT(Scatter);

@@ -337,6 +337,8 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
     while (count < kCapacity && first + count < end && ip_material_[first + count] == material) ++count;
     batch.count = count;
     force_kernel::gather(ip_rows_, padded_u_.data(), first, batch);
+    // The next batch's rows start streaming from memory while this one's stresses are computed.
+    if (first + count < end) force_kernel::prefetch(ip_rows_, first + count, std::min<Index>(end, first + count + kCapacity));
     materials_[material]->stress_batch(batch);
     for (int p = 0; p < kCapacity; ++p) {
       weights[p] = p < count ? ip_weight_[first + p] : 0.0;
