@@ -1,8 +1,12 @@
 #include "mtled/constraints.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
 #include <set>
+
+#include "mtled/log.hpp"
 
 namespace mtled {
 
@@ -20,124 +24,246 @@ void ConstraintSystem::update(const std::vector<NodalConstraints*>& sets, std::s
 
 void ConstraintSystem::rebuild(std::span<const double> mass) {
   ++factorisations_;
-  inverse_mass_.resize(mass.size());
-  for (std::size_t i = 0; i < mass.size(); ++i) inverse_mass_[i] = 1.0 / mass[i];
-  const SupportRows& psi = model_.node_interpolation();
-  const auto n = static_cast<Eigen::Index>(model_.node_count());
-
+  for (NodalConstraints* set : sets_) {
+    set->reactions.assign(set->size(), Vec3::Zero());
+    if (set->values.size() != set->size() || (!set->points().empty() && !set->nodes().empty()))
+      throw std::logic_error(fmt::format("constraint set \"{}\": {} values for {} nodes and {} points", set->name,
+                                         set->values.size(), set->nodes().size(), set->points().size()));
+  }
+  blocks_.clear();
   for (int c = 0; c < 3; ++c) {
-    Component& comp = components_[c];
-    comp.rows.clear();
+    std::vector<Row> rows;
     std::set<Index> claimed;
     for (std::size_t s = 0; s < sets_.size(); ++s) {
-      NodalConstraints& set = *sets_[s];
-      set.reactions.assign(set.size(), Vec3::Zero());
-      if (set.values.size() != set.size() || (!set.points().empty() && !set.nodes().empty()))
-        throw std::logic_error(fmt::format("constraint set \"{}\": {} values for {} nodes and {} points", set.name,
-                                           set.values.size(), set.nodes().size(), set.points().size()));
+      const NodalConstraints& set = *sets_[s];
       if (!set.components()[c]) continue;
       // Material points never coincide with one another's rows by construction; nodes may be claimed twice.
       for (std::size_t k = 0; k < set.size(); ++k)
-        if (!set.points().empty() || claimed.insert(set.nodes()[k]).second) comp.rows.push_back({s, k});
+        if (!set.points().empty() || claimed.insert(set.nodes()[k]).second) rows.push_back({s, k});
     }
-    const auto m = static_cast<Eigen::Index>(comp.rows.size());
-    std::vector<Eigen::Triplet<double>> triplets;
-    std::vector<Index> support;
-    std::vector<double> values;
-    for (Eigen::Index r = 0; r < m; ++r) {
-      const NodalConstraints& set = *sets_[comp.rows[r].set];
-      if (!set.points().empty()) {
-        const Vec3& x = set.points()[comp.rows[r].entry];
-        if (!model_.shape_functions_at(x, support, values))
-          throw std::logic_error(fmt::format("constraint set \"{}\": no shape functions at ({:g}, {:g}, {:g})",
-                                             set.name, x[0], x[1], x[2]));
-        for (std::size_t k = 0; k < support.size(); ++k) triplets.emplace_back(r, support[k], values[k]);
-        continue;
+    if (rows.empty()) continue;
+    const auto same = std::find_if(blocks_.begin(), blocks_.end(), [&](const Block& b) {
+      return std::equal(b.rows.begin(), b.rows.end(), rows.begin(), rows.end(),
+                        [](const Row& x, const Row& y) { return x.set == y.set && x.entry == y.entry; });
+    });
+    if (same != blocks_.end()) {
+      same->components.push_back(c);
+      continue;
+    }
+    blocks_.emplace_back();
+    blocks_.back().components = {c};
+    blocks_.back().rows = std::move(rows);
+  }
+  for (Block& block : blocks_) build_block(block, mass);
+}
+
+void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
+  const SupportRows& psi = model_.node_interpolation();
+  const auto m = static_cast<Eigen::Index>(block.rows.size());
+  std::vector<Eigen::Triplet<double>> triplets;
+  std::vector<Index> support;
+  std::vector<double> values;
+  block.row_offsets.assign(1, 0);
+  block.row_nodes.clear();
+  block.row_values.clear();
+  for (Eigen::Index r = 0; r < m; ++r) {
+    const NodalConstraints& set = *sets_[block.rows[r].set];
+    if (!set.points().empty()) {
+      const Vec3& x = set.points()[block.rows[r].entry];
+      if (!model_.shape_functions_at(x, support, values))
+        throw std::logic_error(fmt::format("constraint set \"{}\": no shape functions at ({:g}, {:g}, {:g})", set.name,
+                                           x[0], x[1], x[2]));
+    } else {
+      const Index node = set.nodes()[block.rows[r].entry];
+      support.assign(psi.nodes.begin() + psi.offsets[node], psi.nodes.begin() + psi.offsets[node + 1]);
+      values.assign(psi.values.begin() + psi.offsets[node], psi.values.begin() + psi.offsets[node + 1]);
+    }
+    for (std::size_t k = 0; k < support.size(); ++k) triplets.emplace_back(r, support[k], values[k]);
+    block.row_nodes.insert(block.row_nodes.end(), support.begin(), support.end());
+    block.row_values.insert(block.row_values.end(), values.begin(), values.end());
+    block.row_offsets.push_back(static_cast<std::int64_t>(block.row_nodes.size()));
+  }
+
+  // Phi by node, scaled by 1 / m: entries in row order within each node.
+  std::vector<std::size_t> order(block.row_nodes.size());
+  for (std::size_t e = 0; e < order.size(); ++e) order[e] = e;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return block.row_nodes[a] < block.row_nodes[b]; });
+  std::vector<Index> entry_row(block.row_nodes.size());
+  for (Eigen::Index r = 0; r < m; ++r)
+    for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e) entry_row[e] = static_cast<Index>(r);
+  block.nodes.clear();
+  block.node_offsets.assign(1, 0);
+  block.node_rows.resize(order.size());
+  block.node_values.resize(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t e = order[k];
+    const Index node = block.row_nodes[e];
+    if (block.nodes.empty() || block.nodes.back() != node) {
+      if (!block.nodes.empty()) block.node_offsets.push_back(static_cast<std::int64_t>(k));
+      block.nodes.push_back(node);
+    }
+    block.node_rows[k] = entry_row[e];
+    block.node_values[k] = block.row_values[e] / mass[node];
+  }
+  block.node_offsets.push_back(static_cast<std::int64_t>(order.size()));
+
+  Eigen::SparseMatrix<double> phi(m, static_cast<Eigen::Index>(model_.node_count()));
+  phi.setFromTriplets(triplets.begin(), triplets.end());
+  Eigen::SparseMatrix<double> phi_m = phi;  // scaled by M^-1 column-wise
+  for (Eigen::Index j = 0; j < phi_m.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(phi_m, j); it; ++it) it.valueRef() /= mass[j];
+  const Eigen::SparseMatrix<double> a = phi_m * Eigen::SparseMatrix<double>(phi.transpose());
+  block.factor.compute(a);
+  if (block.factor.info() != Eigen::Success) {
+    std::string names;
+    for (int c : block.components) names += "xyz"[c];
+    throw InputError("/boundaries",
+                     fmt::format("the constrained nodes of component(s) {} cannot all be prescribed independently (the "
+                                 "constraint matrix is singular): are two constraint sets prescribing coincident nodes?",
+                                 names));
+  }
+  const Eigen::VectorXd D = block.factor.vectorD();
+  block.inverse_diagonal.resize(static_cast<std::size_t>(D.size()));
+  for (Eigen::Index i = 0; i < D.size(); ++i) block.inverse_diagonal[static_cast<std::size_t>(i)] = 1.0 / D[i];
+  log().debug("constraints: components {} share {} rows; Phi {} entries, A {} entries, its factor {} entries",
+              block.components, block.rows.size(), block.row_nodes.size(), a.nonZeros(),
+              block.factor.matrixL().nestedExpression().nonZeros());
+  const std::size_t size = block.rows.size() * block.components.size();
+  block.residual.assign(size, 0.0);
+  block.y.assign(size, 0.0);
+  block.work.assign(size, 0.0);
+}
+
+void ConstraintSystem::constrained_values(const Block& block, std::span<const double> v,
+                                          std::vector<double>& out) const {
+  const std::size_t k = block.components.size();
+  model_.team().for_each_share(static_cast<std::int64_t>(block.rows.size()), [&](std::int64_t begin, std::int64_t end) {
+    for (auto r = static_cast<std::size_t>(begin); r < static_cast<std::size_t>(end); ++r) {
+      double sum[3] = {0.0, 0.0, 0.0};
+      for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e) {
+        const double* vi = &v[3 * static_cast<std::size_t>(block.row_nodes[e])];
+        for (std::size_t j = 0; j < k; ++j) sum[j] += block.row_values[e] * vi[block.components[j]];
       }
-      const Index node = set.nodes()[comp.rows[r].entry];
-      for (std::int64_t k = psi.offsets[node]; k < psi.offsets[node + 1]; ++k)
-        triplets.emplace_back(r, psi.nodes[k], psi.values[k]);
+      for (std::size_t j = 0; j < k; ++j) out[k * r + j] = sum[j];
     }
-    comp.phi.resize(m, n);
-    comp.phi.setFromTriplets(triplets.begin(), triplets.end());
-    comp.residual.resize(m);
-    comp.y.resize(m);
-    comp.lambda = Eigen::VectorXd::Zero(m);
-    if (m == 0) continue;
-    Eigen::SparseMatrix<double> phi_m = comp.phi;  // column-major copy, scaled by M^-1 column-wise
-    for (Eigen::Index j = 0; j < phi_m.outerSize(); ++j)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(phi_m, j); it; ++it) it.valueRef() *= inverse_mass_[j];
-    const Eigen::SparseMatrix<double> phi_t = Eigen::SparseMatrix<double>(comp.phi).transpose();
-    const Eigen::SparseMatrix<double> a = phi_m * phi_t;
-    comp.factor.compute(a);
-    if (comp.factor.info() != Eigen::Success)
-      throw InputError("/boundaries",
-                       fmt::format("the constrained nodes of component {} cannot all be prescribed independently "
-                                   "(the constraint matrix is singular): are two constraint sets prescribing "
-                                   "coincident nodes?",
-                                   "xyz"[c]));
-  }
+  });
 }
 
-void ConstraintSystem::constrained_values(const Component& comp, int c, std::span<const double> v,
-                                          Eigen::VectorXd& out) {
-  for (Eigen::Index r = 0; r < out.size(); ++r) {
-    double sum = 0.0;
-    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
-      sum += it.value() * v[3 * static_cast<std::size_t>(it.col()) + c];
-    out[r] = sum;
-  }
+void ConstraintSystem::add_correction(const Block& block, const std::vector<double>& y, std::span<double> v) const {
+  const std::size_t k = block.components.size();
+  model_.team().for_each_share(static_cast<std::int64_t>(block.nodes.size()), [&](std::int64_t begin, std::int64_t end) {
+    for (auto n = static_cast<std::size_t>(begin); n < static_cast<std::size_t>(end); ++n) {
+      double sum[3] = {0.0, 0.0, 0.0};
+      for (std::int64_t e = block.node_offsets[n]; e < block.node_offsets[n + 1]; ++e) {
+        const double* yr = &y[k * static_cast<std::size_t>(block.node_rows[e])];
+        for (std::size_t j = 0; j < k; ++j) sum[j] += block.node_values[e] * yr[j];
+      }
+      double* vn = &v[3 * static_cast<std::size_t>(block.nodes[n])];
+      for (std::size_t j = 0; j < k; ++j) vn[block.components[j]] += sum[j];
+    }
+  });
 }
 
-void ConstraintSystem::add_correction(const Component& comp, int c, const Eigen::VectorXd& y,
-                                      std::span<double> v) const {
-  for (Eigen::Index r = 0; r < y.size(); ++r)
-    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
-      v[3 * static_cast<std::size_t>(it.col()) + c] += inverse_mass_[it.col()] * it.value() * y[r];
+namespace {
+
+// The factor is A = P^T L D L^T P with L unit lower triangular (Eigen's SimplicialLDLT, L by column); x = A^-1 b
+// as b -> P b, L^-1, D^-1, L^-T, P^T. Solves K right-hand sides at once, components `first` .. first + K - 1 of
+// y (`stride` values per row), in place, interleaved in `x` (K per row) so that each pass over L serves all of
+// them: K independent chains of multiply-adds per entry, K fixed at compile time.
+template <int K>
+void solve_factored(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& factor, const double* D_inverse,
+                    double* y, std::size_t stride, std::size_t first, double* x) {
+  const auto& L = factor.matrixL().nestedExpression();
+  const int* P = factor.permutationP().indices().data();
+  const auto n = static_cast<std::size_t>(L.cols());
+  const int* outer = L.outerIndexPtr();
+  const int* inner = L.innerIndexPtr();
+  const double* value = L.valuePtr();
+  for (std::size_t i = 0; i < n; ++i)
+    for (int j = 0; j < K; ++j) x[K * static_cast<std::size_t>(P[i]) + j] = y[stride * i + first + j];
+  for (std::size_t col = 0; col < n; ++col) {
+    double xc[K];
+    for (int j = 0; j < K; ++j) xc[j] = x[K * col + j];
+    for (int p = outer[col]; p < outer[col + 1]; ++p) {
+      const auto row = static_cast<std::size_t>(inner[p]);
+      if (row <= col) continue;  // the unit diagonal
+      for (int j = 0; j < K; ++j) x[K * row + j] -= value[p] * xc[j];
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (int j = 0; j < K; ++j) x[K * i + j] *= D_inverse[i];
+  for (std::size_t col = n; col-- > 0;) {
+    double sum[K] = {};
+    for (int p = outer[col]; p < outer[col + 1]; ++p) {
+      const auto row = static_cast<std::size_t>(inner[p]);
+      if (row <= col) continue;
+      for (int j = 0; j < K; ++j) sum[j] += value[p] * x[K * row + j];
+    }
+    for (int j = 0; j < K; ++j) x[K * col + j] -= sum[j];
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    for (int j = 0; j < K; ++j) y[stride * i + first + j] = x[K * static_cast<std::size_t>(P[i]) + j];
+}
+
+}  // namespace
+
+void ConstraintSystem::solve(const Block& block, std::vector<double>& y, std::vector<double>& work) const {
+  const std::size_t k = block.components.size(), rows = block.rows.size();
+  work.resize(y.size());
+  const double* D_inverse = block.inverse_diagonal.data();
+  if (k == 1) return solve_factored<1>(block.factor, D_inverse, y.data(), 1, 0, work.data());
+  if (k == 2) return solve_factored<2>(block.factor, D_inverse, y.data(), 2, 0, work.data());
+  // Three components on two threads: two on one, the third on the other, each in its own part of `work`.
+  ThreadTeam& team = model_.team();
+  if (team.size() < 2) return solve_factored<3>(block.factor, D_inverse, y.data(), 3, 0, work.data());
+  team.run([&](int thread) {
+    if (thread == 0) solve_factored<2>(block.factor, D_inverse, y.data(), 3, 0, work.data());
+    if (thread == 1) solve_factored<1>(block.factor, D_inverse, y.data(), 3, 2, work.data() + 2 * rows);
+  });
 }
 
 void ConstraintSystem::enforce(std::span<double> u, double alpha) {
-  for (int c = 0; c < 3; ++c) {
-    Component& comp = components_[c];
-    if (comp.rows.empty()) continue;
-    constrained_values(comp, c, u, comp.residual);  // in place: no allocation in the time step
-    for (Eigen::Index r = 0; r < comp.residual.size(); ++r) {
-      const auto& row = comp.rows[r];
-      comp.residual[r] = sets_[row.set]->values[row.entry][c] - comp.residual[r];
+  for (Block& block : blocks_) {
+    const std::size_t k = block.components.size();
+    constrained_values(block, u, block.residual);  // in place: no allocation in the time step
+    for (std::size_t r = 0; r < block.rows.size(); ++r) {
+      const Vec3& prescribed = sets_[block.rows[r].set]->values[block.rows[r].entry];
+      for (std::size_t j = 0; j < k; ++j)
+        block.y[k * r + j] = prescribed[block.components[j]] - block.residual[k * r + j];
     }
-    comp.y = comp.factor.solve(comp.residual);
-    add_correction(comp, c, comp.y, u);
-    for (Eigen::Index r = 0; r < comp.y.size(); ++r) {
-      const auto& row = comp.rows[r];
-      comp.lambda[r] = comp.y[r] / alpha;
-      sets_[row.set]->reactions[row.entry][c] = comp.lambda[r];
+    solve(block, block.y, block.work);
+    add_correction(block, block.y, u);
+    for (std::size_t r = 0; r < block.rows.size(); ++r) {
+      Vec3& reaction = sets_[block.rows[r].set]->reactions[block.rows[r].entry];
+      for (std::size_t j = 0; j < k; ++j) reaction[block.components[j]] = block.y[k * r + j] / alpha;
     }
   }
 }
 
 void ConstraintSystem::project_out(std::span<double> v) const {
-  for (int c = 0; c < 3; ++c) {
-    const Component& comp = components_[c];
-    if (comp.rows.empty()) continue;
-    Eigen::VectorXd phi_v(comp.residual.size());
-    constrained_values(comp, c, v, phi_v);
-    const Eigen::VectorXd y = comp.factor.solve(-phi_v);
-    add_correction(comp, c, y, v);
+  for (const Block& block : blocks_) {
+    std::vector<double> y(block.y.size()), work;
+    constrained_values(block, v, y);
+    for (double& value : y) value = -value;
+    solve(block, y, work);
+    add_correction(block, y, v);
   }
 }
 
 void ConstraintSystem::add_constraint_forces(std::span<double> f) const {
-  for (int c = 0; c < 3; ++c) {
-    const Component& comp = components_[c];
-    for (Eigen::Index r = 0; r < static_cast<Eigen::Index>(comp.rows.size()); ++r)
-      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(comp.phi, r); it; ++it)
-        f[3 * static_cast<std::size_t>(it.col()) + c] += it.value() * comp.lambda[r];
-  }
+  for (const Block& block : blocks_)
+    for (std::size_t r = 0; r < block.rows.size(); ++r) {
+      const Vec3& reaction = sets_[block.rows[r].set]->reactions[block.rows[r].entry];
+      for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e)
+        for (int c : block.components)
+          f[3 * static_cast<std::size_t>(block.row_nodes[e]) + c] += block.row_values[e] * reaction[c];
+    }
 }
 
 Index ConstraintSystem::constrained_count() const {
   std::size_t count = 0;
-  for (const auto& comp : components_) count += comp.rows.size();
+  for (const auto& block : blocks_) count += block.rows.size() * block.components.size();
   return static_cast<Index>(count);
 }
 

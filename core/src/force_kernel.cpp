@@ -9,6 +9,7 @@
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "force_kernel.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/cache_control.h>
 #include <hwy/highway.h>
 
 #include "force_kernel.hpp"
@@ -90,7 +91,17 @@ HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double*
 }
 #endif
 
-void Gather(const GradientRows& rows, const double* u4, Index first, StressBatch& batch) {
+// Asks the caches for one row (its gradients and record offsets).
+HWY_INLINE void prefetch_row(const GradientRows& rows, Index row) {
+  const auto* g = reinterpret_cast<const char*>(rows.block_gradients(rows.block_begin(row)));
+  const auto* g_end = reinterpret_cast<const char*>(rows.block_gradients(rows.block_end(row)));
+  for (; g < g_end; g += 64) hwy::Prefetch(g);
+  const auto* r = reinterpret_cast<const char*>(rows.block_records(rows.block_begin(row)));
+  const auto* r_end = reinterpret_cast<const char*>(rows.block_records(rows.block_end(row)));
+  for (; r < r_end; r += 64) hwy::Prefetch(r);
+}
+
+void Gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch) {
   const D d;
   constexpr double kIdentity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   for (int p = 0; p < StressBatch::kCapacity; ++p) {
@@ -98,6 +109,9 @@ void Gather(const GradientRows& rows, const double* u4, Index first, StressBatch
       for (int c = 0; c < 9; ++c) batch.F[c][p] = kIdentity[c];
       continue;
     }
+    // The row one batch ahead starts streaming from memory while this batch is computed, one row per row, so
+    // that the requests do not queue up.
+    if (first + p + batch.count < prefetch_end) prefetch_row(rows, first + p + batch.count);
     // One accumulator per component of F, one lane per support entry; the padding entries add 0 x 0.
     V f[9];
     for (auto& v : f) v = hn::Zero(d);
@@ -164,21 +178,12 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace mtled::force_kernel {
-void prefetch(const GradientRows& rows, Index begin, Index end) {
-  const auto* g = reinterpret_cast<const char*>(rows.block_gradients(rows.block_begin(begin)));
-  const auto* g_end = reinterpret_cast<const char*>(rows.block_gradients(rows.block_begin(end)));
-  for (; g < g_end; g += 64) __builtin_prefetch(g);
-  const auto* r = reinterpret_cast<const char*>(rows.block_records(rows.block_begin(begin)));
-  const auto* r_end = reinterpret_cast<const char*>(rows.block_records(rows.block_begin(end)));
-  for (; r < r_end; r += 64) __builtin_prefetch(r);
-}
-
 HWY_EXPORT(Gather);
 HWY_EXPORT(FirstPiola);
 HWY_EXPORT(Scatter);
 
-void gather(const GradientRows& rows, const double* u4, Index first, StressBatch& batch) {
-  HWY_DYNAMIC_DISPATCH(Gather)(rows, u4, first, batch);
+void gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch) {
+  HWY_DYNAMIC_DISPATCH(Gather)(rows, u4, first, prefetch_end, batch);
 }
 void first_piola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]) {
   HWY_DYNAMIC_DISPATCH(FirstPiola)(batch, weights, P);

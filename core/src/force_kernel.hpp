@@ -13,10 +13,9 @@
 
 namespace mtled::force_kernel {
 
-// batch.F for integration points first .. first + batch.count - 1.
-void gather(const GradientRows& rows, const double* u4, Index first, StressBatch& batch);
-// Asks the caches for the rows of integration points begin .. end - 1.
-void prefetch(const GradientRows& rows, Index begin, Index end);
+// batch.F for integration points first .. first + batch.count - 1; meanwhile asks the caches for the rows of
+// the next as many points, up to prefetch_end (exclusive).
+void gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch);
 // P[c][p] = w_p (F S)_c of lane p (c = 3 i + j), for every lane.
 void first_piola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]);
 // f4 += P (grad N + xi) over the rows of integration points first .. first + count - 1, lane p of P for point

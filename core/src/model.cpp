@@ -93,8 +93,10 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   if (options.consistent_integration) build_integration_correction();
   if (options.nodal_volumetric_averaging) build_volumetric_averaging();
   padded_u_.assign(padded, 0.0);
-  thread_forces_.resize(static_cast<std::size_t>(omp_get_max_threads()));
+  team_ = std::make_unique<ThreadTeam>(options.threads > 0 ? options.threads : omp_get_max_threads());
+  thread_forces_.resize(static_cast<std::size_t>(team_->size()));
   for (auto& buffer : thread_forces_) buffer.assign(padded, 0.0);
+  thread_first_bad_.assign(thread_forces_.size(), std::numeric_limits<Index>::max());
 }
 
 Model::~Model() = default;
@@ -303,21 +305,20 @@ Mat3 Model::deformation_gradient(Index ip, std::span<const double> u) const {
   return deformation_gradient_at(ip_rows_, ip, u.data());
 }
 
-// Called inside a parallel region.
-void Model::pad_displacement(std::span<const double> u) const {
-#pragma omp for schedule(static)
-  for (Index i = 0; i < node_count(); ++i)
+// A team task: thread `thread`'s share of the nodes.
+void Model::pad_displacement(std::span<const double> u, int thread) const {
+  const auto [begin, end] = ThreadTeam::share(node_count(), thread, team_->size());
+  for (std::int64_t i = begin; i < end; ++i)
     for (std::size_t c = 0; c < 3; ++c) padded_u_[4 * static_cast<std::size_t>(i) + c] = u[3 * static_cast<std::size_t>(i) + c];
 }
 
-// Called inside a parallel region: sums the per-thread buffers in a fixed order, each thread its own slice.
-void Model::reduce_thread_forces(std::span<double> f) const {
-  const auto team = static_cast<std::size_t>(omp_get_num_threads());
-#pragma omp for schedule(static)
-  for (Index i = 0; i < node_count(); ++i)
+// A team task: sums the per-thread buffers in a fixed order over thread `thread`'s share of the nodes.
+void Model::reduce_thread_forces(std::span<double> f, int thread) const {
+  const auto [begin, end] = ThreadTeam::share(node_count(), thread, team_->size());
+  for (std::int64_t i = begin; i < end; ++i)
     for (std::size_t c = 0; c < 3; ++c) {
       double sum = 0.0;
-      for (std::size_t t = 0; t < team; ++t) sum += thread_forces_[t][4 * static_cast<std::size_t>(i) + c];
+      for (const auto& buffer : thread_forces_) sum += buffer[4 * static_cast<std::size_t>(i) + c];
       f[3 * static_cast<std::size_t>(i) + c] = sum;
     }
 }
@@ -336,9 +337,7 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
     int count = 1;
     while (count < kCapacity && first + count < end && ip_material_[first + count] == material) ++count;
     batch.count = count;
-    force_kernel::gather(ip_rows_, padded_u_.data(), first, batch);
-    // The next batch's rows start streaming from memory while this one's stresses are computed.
-    if (first + count < end) force_kernel::prefetch(ip_rows_, first + count, std::min<Index>(end, first + count + kCapacity));
+    force_kernel::gather(ip_rows_, padded_u_.data(), first, end, batch);
     materials_[material]->stress_batch(batch);
     for (int p = 0; p < kCapacity; ++p) {
       weights[p] = p < count ? ip_weight_[first + p] : 0.0;
@@ -354,21 +353,21 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
   if (averaging_.enabled) return internal_forces_averaged(u, f);
   const std::int64_t n = integration_point_count();
-  Index first_bad = std::numeric_limits<Index>::max();
-  // The team is the one the per-thread buffers were sized for, whatever a plugin did to OpenMP since.
-#pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
-  {
-    const std::int64_t thread = omp_get_thread_num(), team = omp_get_num_threads();
+  std::vector<Index>& first_bad = thread_first_bad_;
+  team_->run([&](int thread) {
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
     std::fill(local.begin(), local.end(), 0.0);
-    pad_displacement(u);  // ends with a barrier
-    // Contiguous ranges, so that each thread's batches are consecutive points.
-    first_bad = std::min(first_bad, accumulate_forces(static_cast<Index>(n * thread / team),
-                                                      static_cast<Index>(n * (thread + 1) / team), local.data()));
-#pragma omp barrier
-    reduce_thread_forces(f);
-  }
-  return first_bad == std::numeric_limits<Index>::max() ? -1 : first_bad;
+    pad_displacement(u, thread);
+    team_->barrier();
+    // Contiguous shares, so that each thread's batches are consecutive points.
+    const auto [begin, end] = ThreadTeam::share(n, thread, team_->size());
+    first_bad[static_cast<std::size_t>(thread)] =
+        accumulate_forces(static_cast<Index>(begin), static_cast<Index>(end), local.data());
+    team_->barrier();
+    reduce_thread_forces(f, thread);
+  });
+  const Index bad = *std::min_element(first_bad.begin(), first_bad.end());
+  return bad == std::numeric_limits<Index>::max() ? -1 : bad;
 }
 
 void Model::build_volumetric_averaging() {
@@ -404,17 +403,19 @@ void Model::build_volumetric_averaging() {
 void Model::averaged_dilatation(std::span<const double> u, Index& first_bad_point) const {
   const VolumetricAveraging& a = averaging_;
   const Index n = integration_point_count();
-  Index first_bad = first_bad_point;
   const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
-#pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
-  {
-    pad_displacement(u);
+  std::vector<Index>& first_bad = thread_first_bad_;
+  team_->run([&](int thread) {
+    const int size = team_->size();
+    first_bad[static_cast<std::size_t>(thread)] = std::numeric_limits<Index>::max();
+    pad_displacement(u, thread);
+    team_->barrier();
     StressBatch batch{};
-#pragma omp for schedule(static)
-    for (Index b = 0; b < batches; ++b) {
-      const Index first = b * StressBatch::kCapacity;
+    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, size);
+    for (auto b = batch_begin; b < batch_end; ++b) {
+      const auto first = static_cast<Index>(b * StressBatch::kCapacity);
       batch.count = std::min<Index>(StressBatch::kCapacity, n - first);
-      force_kernel::gather(ip_rows_, padded_u_.data(), first, batch);
+      force_kernel::gather(ip_rows_, padded_u_.data(), first, n, batch);
       for (int p = 0; p < batch.count; ++p) {
         const Index ip = first + p;
         const Mat3 F = batch.deformation_gradient(p);
@@ -422,15 +423,16 @@ void Model::averaged_dilatation(std::span<const double> u, Index& first_bad_poin
         a.local_stress[ip] = F;
         a.J[ip] = J;
         if (!(J > 0.0) || !std::isfinite(J) || !F.allFinite()) {
-          first_bad = std::min(first_bad, ip);
+          first_bad[static_cast<std::size_t>(thread)] = std::min(first_bad[static_cast<std::size_t>(thread)], ip);
           a.cofactor[ip].setZero();
           continue;
         }
         a.cofactor[ip] = J * F.inverse().transpose();
       }
     }
-#pragma omp for schedule(static)
-    for (Index node = 0; node < node_count(); ++node) {
+    team_->barrier();
+    const auto [node_begin, node_end] = ThreadTeam::share(node_count(), thread, size);
+    for (auto node = node_begin; node < node_end; ++node) {
       double sum = 0.0;
       for (std::int64_t k = a.node_points.offsets[node]; k < a.node_points.offsets[node + 1]; ++k) {
         const Index ip = a.node_points.nodes[k];
@@ -438,13 +440,14 @@ void Model::averaged_dilatation(std::span<const double> u, Index& first_bad_poin
       }
       a.node_value[node] = sum / a.node_weight[node];
     }
-#pragma omp for schedule(static)
-    for (Index ip = 0; ip < n; ++ip) {
+    team_->barrier();
+    const auto [ip_begin, ip_end] = ThreadTeam::share(n, thread, size);
+    for (auto ip = ip_begin; ip < ip_end; ++ip) {
       const auto& tet = mesh_.tets[ip_tet_[ip]];
       a.J_bar[ip] = 0.25 * (a.node_value[tet[0]] + a.node_value[tet[1]] + a.node_value[tet[2]] + a.node_value[tet[3]]);
     }
-  }
-  first_bad_point = first_bad;
+  });
+  first_bad_point = std::min(first_bad_point, *std::min_element(first_bad.begin(), first_bad.end()));
 }
 
 // E = sum_q w_q W(F_bar_q), F_bar = r F with r = (J_bar / J)^(1/3), so det F_bar = J_bar. Its gradient has a local
@@ -455,19 +458,21 @@ void Model::averaged_dilatation(std::span<const double> u, Index& first_bad_poin
 Index Model::internal_forces_averaged(std::span<const double> u, std::span<double> f) const {
   const VolumetricAveraging& a = averaging_;
   const Index n = integration_point_count();
-  Index first_bad = std::numeric_limits<Index>::max();
-  averaged_dilatation(u, first_bad);
-  if (first_bad != std::numeric_limits<Index>::max()) return first_bad;
-#pragma omp parallel num_threads(static_cast<int>(thread_forces_.size())) reduction(min : first_bad)
-  {
-#pragma omp for schedule(static)
-    for (Index ip = 0; ip < n; ++ip) {
+  Index bad = std::numeric_limits<Index>::max();
+  averaged_dilatation(u, bad);
+  if (bad != std::numeric_limits<Index>::max()) return bad;
+  std::vector<Index>& first_bad = thread_first_bad_;
+  team_->run([&](int thread) {
+    const int size = team_->size();
+    Index& thread_bad = first_bad[static_cast<std::size_t>(thread)];
+    const auto [ip_begin, ip_end] = ThreadTeam::share(n, thread, size);
+    for (auto ip = static_cast<Index>(ip_begin); ip < ip_end; ++ip) {
       const Mat3 F = a.local_stress[ip];
       const double r = std::cbrt(a.J_bar[ip] / a.J[ip]);
       const Mat3 F_bar = r * F;
       Mat3 S;
       if (!ip_material(ip).stress(F_bar, S)) {
-        first_bad = std::min(first_bad, ip);
+        thread_bad = std::min(thread_bad, ip);
         a.pressure[ip] = 0.0;
         a.local_stress[ip].setZero();
         a.cofactor[ip].setZero();
@@ -478,21 +483,23 @@ Index Model::internal_forces_averaged(std::span<const double> u, std::span<doubl
       a.local_stress[ip] = (ip_weight_[ip] * r) * (P_bar - (P_bar.cwiseProduct(F).sum() / 3.0) * F_inverse_transpose);
       a.pressure[ip] = ip_weight_[ip] * P_bar.cwiseProduct(F_bar).sum() / (3.0 * a.J_bar[ip]);
     }
-#pragma omp for schedule(static)
-    for (Index node = 0; node < node_count(); ++node) {
+    team_->barrier();
+    const auto [node_begin, node_end] = ThreadTeam::share(node_count(), thread, size);
+    for (auto node = node_begin; node < node_end; ++node) {
       double sum = 0.0;
       for (std::int64_t k = a.node_points.offsets[node]; k < a.node_points.offsets[node + 1]; ++k)
         sum += a.pressure[a.node_points.nodes[k]];
       a.node_value[node] = 0.25 * sum / a.node_weight[node];
     }
-    AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(omp_get_thread_num())];
+    AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
     std::fill(local.begin(), local.end(), 0.0);
+    team_->barrier();
     const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
     double P[9][StressBatch::kCapacity];
     const bool skip[StressBatch::kCapacity] = {};
-#pragma omp for schedule(static)
-    for (Index b = 0; b < batches; ++b) {
-      const Index first = b * StressBatch::kCapacity;
+    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, size);
+    for (auto b = batch_begin; b < batch_end; ++b) {
+      const auto first = static_cast<Index>(b * StressBatch::kCapacity);
       const int count = std::min<Index>(StressBatch::kCapacity, n - first);
       for (int p = 0; p < count; ++p) {
         const auto& tet = mesh_.tets[ip_tet_[first + p]];
@@ -503,9 +510,11 @@ Index Model::internal_forces_averaged(std::span<const double> u, std::span<doubl
       }
       force_kernel::scatter(ip_rows_, xi_.data(), first, count, P, skip, local.data());
     }
-    reduce_thread_forces(f);
-  }
-  return first_bad == std::numeric_limits<Index>::max() ? -1 : first_bad;
+    team_->barrier();
+    reduce_thread_forces(f, thread);
+  });
+  bad = *std::min_element(first_bad.begin(), first_bad.end());
+  return bad == std::numeric_limits<Index>::max() ? -1 : bad;
 }
 
 double Model::strain_energy(std::span<const double> u) const {

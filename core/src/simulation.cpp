@@ -362,35 +362,49 @@ void Simulation::check_energy(std::span<const double> u_new, double step_size) {
   // The projection onto the constraints also changes the velocities it touches: the kinetic energy it adds is
   // work the prescribed motion does on the nodes it drives directly. Only additions count: the energy it takes
   // out of a growing mode (at fixed nodes) must not raise the bound that mode is measured against.
-  if (step_size > 0.0) {
-    double added = 0.0;
-    for (std::size_t d = 0; d < u_new.size(); ++d) {
-      const double after = u_new[d] - u_[d], before = u_free_[d] - u_[d];
-      added += mass_[d / 3] * std::max(0.0, after * after - before * before);
-    }
-    work_bound_ += 0.5 * added / (step_size * step_size);
-  }
-  // External force drivers would need their own work; none of the shipped plugins has one.
-  if (!force_sets_.empty() || !(step_size > 0.0) || !(previous_step_size_ > 0.0)) return;
   // The kinetic energy central differences conserve: 1/2 v(n-1/2) M v(n+1/2), the product of the two half-step
   // velocities around step n. (The square of one half-step velocity overstates the energy of modes near the
   // stability limit by 1 / (1 - (h omega / 2)^2), which would flag stable runs at large time-step factors.)
-  // For a mode that grows, it grows too (in magnitude).
-  const double scale = 0.5 / (step_size * previous_step_size_);
-  double kinetic = 0.0;
+  // For a mode that grows, it grows too (in magnitude). Both in one pass over the nodes, shared by the team and
+  // summed in thread order.
+  if (!(step_size > 0.0)) return;
+  // External force drivers would need their own work; none of the shipped plugins has one.
+  const bool check = force_sets_.empty() && previous_step_size_ > 0.0;
+  const double scale = check ? 0.5 / (step_size * previous_step_size_) : 0.0;
+  ThreadTeam& team = model_->team();
+  std::vector<EnergySums>& sums = energy_sums_;
+  sums.assign(static_cast<std::size_t>(team.size()), EnergySums{});
+  team.run([&](int thread) {
+    EnergySums& mine = sums[static_cast<std::size_t>(thread)];
+    const auto [begin, end] = ThreadTeam::share(model_->node_count(), thread, team.size());
+    for (auto i = static_cast<std::size_t>(begin); i < static_cast<std::size_t>(end); ++i) {
+      double added = 0.0, product = 0.0;
+      for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
+        const double after = u_new[d] - u_[d], before = u_free_[d] - u_[d];
+        added += std::max(0.0, after * after - before * before);
+        product += (u_[d] - u_previous_[d]) * after;
+      }
+      mine.added += mass_[i] * added;
+      const double e = scale * mass_[i] * product;
+      mine.kinetic += e;
+      if (std::abs(e) > mine.fastest_energy) {
+        mine.fastest_energy = std::abs(e);
+        mine.fastest = static_cast<Index>(i);
+      }
+    }
+  });
+  double added = 0.0, kinetic = 0.0, fastest_energy = 0.0;
   Index fastest = 0;
-  double fastest_energy = 0.0;
-  for (Index i = 0; i < model_->node_count(); ++i) {
-    double product = 0.0;
-    for (std::size_t d = 3 * static_cast<std::size_t>(i); d < 3 * static_cast<std::size_t>(i) + 3; ++d)
-      product += (u_[d] - u_previous_[d]) * (u_new[d] - u_[d]);
-    const double e = scale * mass_[i] * product;
-    kinetic += e;
-    if (std::abs(e) > fastest_energy) {
-      fastest_energy = std::abs(e);
-      fastest = i;
+  for (const EnergySums& part : sums) {
+    added += part.added;
+    kinetic += part.kinetic;
+    if (part.fastest_energy > fastest_energy) {
+      fastest_energy = part.fastest_energy;
+      fastest = part.fastest;
     }
   }
+  work_bound_ += 0.5 * added / (step_size * step_size);
+  if (!check) return;
   kinetic = std::abs(kinetic);
   // Kinetic plus strain energy never exceed the work put in (damping only removes energy), and the work is
   // bounded by the sum of |reaction x increment| accumulated above. A factor of 10 leaves room for the

@@ -5,9 +5,12 @@
 // per displacement component, where row K of Phi holds the shape functions at constrained node (or material
 // point) K. Then the interpolated displacement there equals the prescribed one to round-off, and the
 // reaction at K is lambda_K = y_K / alpha (alpha: the integrator's factor on M^-1 f in its update).
-// The matrices are factorised once per change of the constrained sets.
+// The matrices are factorised once per change of the constrained sets. Components with the same constrained
+// rows (a fixed boundary, a needle held in every direction) share one matrix and are solved together, one
+// pass over the factor for all of them.
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <deque>
 #include <span>
 #include <vector>
 
@@ -39,22 +42,36 @@ class ConstraintSystem {
     std::size_t set;
     std::size_t entry;
   };
-  struct Component {
+  // The components that share one list of constrained rows, with Phi for those rows in both orientations
+  // (by row for Phi v, by node for Phi^T y, so that threads take disjoint nodes), and the factor of
+  // Phi M^-1 Phi^T. Vectors over the rows hold one value per component of the block, interleaved.
+  struct Block {
+    std::vector<int> components;
     std::vector<Row> rows;
-    Eigen::SparseMatrix<double, Eigen::RowMajor> phi;
+    std::vector<std::int64_t> row_offsets;  // Phi by row: entries row_offsets[r] .. row_offsets[r+1] - 1
+    std::vector<Index> row_nodes;
+    std::vector<double> row_values;
+    std::vector<Index> nodes;                // the nodes Phi touches, each once
+    std::vector<std::int64_t> node_offsets;  // Phi by node: entries node_offsets[k] .. node_offsets[k+1] - 1
+    std::vector<Index> node_rows;
+    std::vector<double> node_values;  // Phi(r, node) / m_node
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor;
-    Eigen::VectorXd residual, y, lambda;
+    std::vector<double> inverse_diagonal;  // of the factor's D
+    std::vector<double> residual, y, work;  // rows x components
   };
   void rebuild(std::span<const double> mass);
-  // out = Phi_c v (one entry per row of component c; out is sized already) and v += M^-1 Phi_c^T y.
-  static void constrained_values(const Component& comp, int c, std::span<const double> v, Eigen::VectorXd& out);
-  void add_correction(const Component& comp, int c, const Eigen::VectorXd& y, std::span<double> v) const;
+  void build_block(Block& block, std::span<const double> mass);
+  // out = Phi v over the block's components (rows x components), in parallel over the rows.
+  void constrained_values(const Block& block, std::span<const double> v, std::vector<double>& out) const;
+  // v += M^-1 Phi^T y over the block's components, in parallel over the nodes.
+  void add_correction(const Block& block, const std::vector<double>& y, std::span<double> v) const;
+  // y = (Phi M^-1 Phi^T)^-1 y in place, for every component of the block at once (work: scratch).
+  void solve(const Block& block, std::vector<double>& y, std::vector<double>& work) const;
 
   const Model& model_;
   std::vector<NodalConstraints*> sets_;
   std::vector<std::uint64_t> revisions_;
-  std::vector<double> inverse_mass_;
-  Component components_[3];
+  std::deque<Block> blocks_;  // a deque: the factor cannot move
   long factorisations_ = 0;
 };
 

@@ -13,6 +13,7 @@
 #include "mtled/interfaces/shape_functions.hpp"
 #include "mtled/mesh.hpp"
 #include "mtled/point_search.hpp"
+#include "mtled/thread_team.hpp"
 
 namespace mtled {
 
@@ -83,6 +84,8 @@ class Model {
     // Relieves the volumetric locking of nearly incompressible materials (about five integration points per
     // node each imposing J = 1); the forces stay the exact gradient of sum_ip w W(F_bar).
     bool nodal_volumetric_averaging = false;
+    // Threads of the force evaluation; 0: OpenMP's count (omp_get_max_threads(), set by --threads).
+    int threads = 0;
   };
 
   // `region_materials[r]` fills mesh region r.
@@ -106,6 +109,7 @@ class Model {
   const std::vector<double>& ip_weights() const { return ip_weight_; }
   const std::vector<Index>& ip_tets() const { return ip_tet_; }
   const Material& ip_material(Index ip) const { return *materials_[ip_material_[ip]]; }
+  ThreadTeam& team() const { return *team_; }
   const GradientRows& ip_supports() const { return ip_rows_; }      // gradients
   const SupportRows& node_interpolation() const { return node_rows_; }  // values at the nodes
   SupportStatistics ip_support_statistics() const { return ip_stats_; }
@@ -125,7 +129,7 @@ class Model {
 
   // Internal nodal forces f_I = sum_ip w F S (grad N_I + xi_I) for nodal parameters u (3 per node). Returns -1, or
   // the lowest-numbered integration point whose F is inadmissible (J <= 0 or not finite); f is then
-  // incomplete. Parallel over integration points (OpenMP); not re-entrant. With nodal volumetric averaging,
+  // incomplete. Parallel over integration points (the model's ThreadTeam); not re-entrant. With nodal volumetric averaging,
   // f = dE/du of E = sum_ip w W(F_bar) (see Options).
   Index internal_forces(std::span<const double> u, std::span<double> f) const;
   double strain_energy(std::span<const double> u) const;
@@ -149,10 +153,11 @@ class Model {
   // then J_bar at every integration point.
   void averaged_dilatation(std::span<const double> u, Index& first_bad) const;
   Index internal_forces_averaged(std::span<const double> u, std::span<double> f) const;
-  // Copies u into the padded per-node layout the kernel gathers from (4 per node, then the padding node's zeros).
-  void pad_displacement(std::span<const double> u) const;
+  // Team tasks over thread `thread`'s share of the nodes: u into the padded per-node layout the kernel reads (4
+  // per node, then the padding node's zeros); the per-thread force buffers summed into f.
+  void pad_displacement(std::span<const double> u, int thread) const;
   Index accumulate_forces(Index begin, Index end, double* f4) const;
-  void reduce_thread_forces(std::span<double> f) const;
+  void reduce_thread_forces(std::span<double> f, int thread) const;
   // Support lists of arbitrary points (at least the shape functions' minimum); throws InputError naming `what`.
   std::vector<std::vector<Index>> find_supports(const std::vector<Vec3>& points, const char* what) const;
   // Shape functions at the points on those supports: store(r, k, value, gradient) for each entry, gradients only
@@ -184,6 +189,8 @@ class Model {
   AlignedVector<double> xi_;
   mutable AlignedVector<double> padded_u_;
   mutable std::vector<AlignedVector<double>> thread_forces_;
+  mutable std::vector<Index> thread_first_bad_;
+  std::unique_ptr<ThreadTeam> team_;  // the time step's threads (setup loops use OpenMP)
 
   // Nodal volumetric averaging: allocated only when the scene asks for it.
   struct VolumetricAveraging {

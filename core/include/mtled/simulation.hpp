@@ -92,6 +92,12 @@ class Simulation final : public DiscreteSystem {
   // |kinetic energy the constraint projection added|.
   double work_bound_ = 0.0;
   double previous_step_size_ = 0.0;
+  // Per-thread parts of check_energy's sums.
+  struct EnergySums {
+    double added = 0.0, kinetic = 0.0, fastest_energy = 0.0;
+    Index fastest = 0;
+  };
+  std::vector<EnergySums> energy_sums_;
   std::vector<double> u_free_;  // this step's displacements before the constraint projection
 
   long stable_step_every_ = 0;
