@@ -10,8 +10,8 @@
 namespace mtled::hyperelastic {
 
 // Whether a law may be evaluated at F, with J = det F. The Material interface requires refusing an
-// inverted or collapsed F (J <= 0) and non-finite entries instead of hiding them with |J| (DESIGN.md,
-// "Known pitfalls"); this is checked before any power of J is taken.
+// inverted or collapsed F (J <= 0) and non-finite entries instead of hiding them with |J| (which would let
+// inverted material pass as a valid state); this is checked before any power of J is taken.
 inline bool admissible(const Mat3& F, double& J) noexcept {
   J = F.determinant();
   return J > 0.0 && std::isfinite(J) && F.allFinite();

@@ -1,6 +1,7 @@
 // One-term compressible Ogden law, the paper's eq. (1):
 //   W = (2 mu / alpha^2)(J^(-alpha/3) sum_i lambda_i^alpha - 3) + (1/D)(J - 1)^2.
-// Stress in principal form (DESIGN.md, "Materials"). For an isotropic W(lambda_1, lambda_2, lambda_3),
+// Stress in principal form (as for any isotropic law of the principal stretches, e.g. Holzapfel, Nonlinear
+// Solid Mechanics, 2000, sec. 6.5). For an isotropic W(lambda_1, lambda_2, lambda_3),
 // S_i = (1/lambda_i) dW/dlambda_i along the eigenvectors of C. With dJ/dlambda_i = J / lambda_i,
 //   dW/dlambda_i = (2 mu / alpha) J^(-alpha/3) (lambda_i^(alpha-1) - sum_j lambda_j^alpha / (3 lambda_i))
 //                  + (2/D)(J - 1) J / lambda_i,

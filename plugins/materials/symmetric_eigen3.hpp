@@ -1,6 +1,6 @@
 #pragma once
 // Eigen decomposition of a symmetric 3x3 matrix, closed form and accurate when eigenvalues are equal or
-// nearly equal, for the principal-stretch form of the Ogden law (DESIGN.md, "Materials").
+// nearly equal, for the principal-stretch form of the Ogden law (ogden.cpp).
 //
 // Why not Eigen's SelfAdjointEigenSolver: its iterative solver is accurate but costs about twice as much,
 // and its computeDirect() takes every eigenvalue from the trigonometric solution of the characteristic

@@ -1,5 +1,5 @@
-// `mls`: moving least squares with the quartic spline weight and a linear or quadratic basis (DESIGN.md, "MLS
-// and MMLS"); the MTLED papers use the linear basis.
+// `mls`: moving least squares with the quartic spline weight and a linear or quadratic basis (Lancaster and
+// Salkauskas, Math. Comp. 1981; moving_least_squares.hpp); the MTLED papers use the linear basis.
 #include <fmt/format.h>
 
 #include "moving_least_squares.hpp"
@@ -14,7 +14,7 @@ class MlsShapeFunctions final : public ShapeFunctions {
               "scaled coordinates, exact gradients.");
     shapefunctions::declare_support_dilatation(
         d, 1.6,
-        "1.5 to 1.6 is usual with the linear basis (DESIGN.md). The quadratic basis needs at least 10 well-spread "
+        "1.5 to 1.6 is usual with the linear basis (Horton, Wittek, Joldes, Miller, Commun. Numer. Methods Eng. 2010). The quadratic basis needs at least 10 well-spread "
         "nodes in every support: use 1.8 to 2.0 with it (at 1.6, boundary supports of a Gmsh mesh have as few as "
         "14 nodes and |N_I| up to 1.7), or use mmls.");
     d.string("basis")

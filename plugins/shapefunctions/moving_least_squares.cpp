@@ -20,7 +20,8 @@ struct NodeWeight {
   Vec3 gradient = Vec3::Zero();  // dw/dx, with respect to the evaluation point
 };
 
-// Quartic spline w(r) = 1 - 6r^2 + 8r^3 - 3r^4 = (1 - r)^3 (1 + 3r) for r = |X_I - x| / R_I < 1 (DESIGN.md),
+// Quartic spline w(r) = 1 - 6r^2 + 8r^3 - 3r^4 = (1 - r)^3 (1 + 3r) for r = |X_I - x| / R_I < 1 (the MTLED
+// papers' weight, Horton et al. 2010),
 // and dw/dx = w'(r) dr/dx = 12 (1 - r)^2 (X_I - x) / R_I^2, which needs no division by |X_I - x| and so stays
 // smooth when x sits on the node. Radii that are not positive (or NaN) give no weight.
 NodeWeight quartic_spline(const Vec3& offset, double radius) {

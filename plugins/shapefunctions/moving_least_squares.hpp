@@ -1,5 +1,6 @@
 #pragma once
-// The moving-least-squares fit shared by the `mls` and `mmls` plugins (DESIGN.md, "MLS and MMLS").
+// The moving-least-squares fit shared by the `mls` and `mmls` plugins (MLS: Lancaster and Salkauskas, Math.
+// Comp. 1981; MMLS: Joldes, Chowdhury, Wittek, Doyle, Miller, Appl. Math. Comput. 2015).
 //
 // One evaluation at a point x:
 //   w_I   quartic spline of r_I = |X_I - x| / R_I (zero for r_I >= 1),

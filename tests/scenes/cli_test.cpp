@@ -1,4 +1,4 @@
-// The command line's contract (DESIGN.md Part 1): exit codes, messages that name the JSON pointer or the
+// The command line's contract (README.md): exit codes, messages that name the JSON pointer or the
 // file, the plugin search path, and summary.json's plugins_loaded.
 #include <gtest/gtest.h>
 
