@@ -27,8 +27,9 @@ for page in pages:
             checked_links += 1
             if not (page.parent / target).exists():
                 problems.append(f"{where}: link to {target}, which does not exist")
-        # Commands shown as examples: an indented line or a table cell starting with build/bin/mtled.
-        match = re.search(r"build/bin/mtled (run|validate|study) ([^|`#]*)", line)
+        # Commands shown as examples: an indented line or a table cell starting with build/bin/mtled; a quote
+        # ends one (a command quoted inside another, as farm-bench's --vs takes it).
+        match = re.search(r"build/bin/mtled (run|validate|study) ([^|`#\"']*)", line)
         if not match:
             continue
         words = shlex.split(match.group(2))
