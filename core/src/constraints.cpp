@@ -9,6 +9,11 @@
 #include "mtled/log.hpp"
 
 namespace mtled {
+namespace {
+// Rows (or nodes) of Phi, about 30 entries each, below which a loop runs on one thread: on the default needle
+// scene (694 rows) splitting still paid; on the small cube's few dozen rows per set it did not.
+constexpr std::int64_t kRowsWorthAThread = 256;
+}  // namespace
 
 void ConstraintSystem::update(const std::vector<NodalConstraints*>& sets, std::span<const double> mass,
                               bool mass_changed) {
@@ -147,7 +152,7 @@ void ConstraintSystem::constrained_values(const Block& block, std::span<const do
       }
       for (std::size_t j = 0; j < k; ++j) out[k * r + j] = sum[j];
     }
-  });
+  }, kRowsWorthAThread);
 }
 
 void ConstraintSystem::add_correction(const Block& block, const std::vector<double>& y, std::span<double> v) const {
@@ -162,7 +167,7 @@ void ConstraintSystem::add_correction(const Block& block, const std::vector<doub
       double* vn = &v[3 * static_cast<std::size_t>(block.nodes[n])];
       for (std::size_t j = 0; j < k; ++j) vn[block.components[j]] += sum[j];
     }
-  });
+  }, kRowsWorthAThread);
 }
 
 namespace {
@@ -216,7 +221,7 @@ void ConstraintSystem::solve(const Block& block, std::vector<double>& y, std::ve
   if (k == 2) return solve_factored<2>(block.factor, D_inverse, y.data(), 2, 0, work.data());
   // Three components on two threads: two on one, the third on the other, each in its own part of `work`.
   ThreadTeam& team = model_.team();
-  if (team.size() < 2) return solve_factored<3>(block.factor, D_inverse, y.data(), 3, 0, work.data());
+  if (team.size() < 2 || rows < kRowsWorthAThread) return solve_factored<3>(block.factor, D_inverse, y.data(), 3, 0, work.data());
   team.run([&](int thread) {
     if (thread == 0) solve_factored<2>(block.factor, D_inverse, y.data(), 3, 0, work.data());
     if (thread == 1) solve_factored<1>(block.factor, D_inverse, y.data(), 3, 2, work.data() + 2 * rows);

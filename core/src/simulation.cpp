@@ -372,11 +372,13 @@ void Simulation::check_energy(std::span<const double> u_new, double step_size) {
   const bool check = force_sets_.empty() && previous_step_size_ > 0.0;
   const double scale = check ? 0.5 / (step_size * previous_step_size_) : 0.0;
   ThreadTeam& team = model_->team();
+  // A pass of a few operations per node: worth the team only on large clouds.
+  const int parts = model_->node_count() >= 8192 * team.size() ? team.size() : 1;
   std::vector<EnergySums>& sums = energy_sums_;
-  sums.assign(static_cast<std::size_t>(team.size()), EnergySums{});
-  team.run([&](int thread) {
+  sums.assign(static_cast<std::size_t>(parts), EnergySums{});
+  const auto pass = [&](int thread) {
     EnergySums& mine = sums[static_cast<std::size_t>(thread)];
-    const auto [begin, end] = ThreadTeam::share(model_->node_count(), thread, team.size());
+    const auto [begin, end] = ThreadTeam::share(model_->node_count(), thread, parts);
     for (auto i = static_cast<std::size_t>(begin); i < static_cast<std::size_t>(end); ++i) {
       double added = 0.0, product = 0.0;
       for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
@@ -392,7 +394,11 @@ void Simulation::check_energy(std::span<const double> u_new, double step_size) {
         mine.fastest = static_cast<Index>(i);
       }
     }
-  });
+  };
+  if (parts == 1)
+    pass(0);
+  else
+    team.run(pass);
   double added = 0.0, kinetic = 0.0, fastest_energy = 0.0;
   Index fastest = 0;
   for (const EnergySums& part : sums) {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <exception>
 #include <thread>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -30,7 +31,9 @@ class ThreadTeam {
       task(0);
       return;
     }
-    Function function{&task, [](void* t, int thread) { (*static_cast<Task*>(t))(thread); }};
+    using Callable = std::remove_reference_t<Task>;
+    Function function{const_cast<void*>(static_cast<const void*>(&task)),
+                      [](void* t, int thread) { (*static_cast<Callable*>(t))(thread); }};
     dispatch(function);
   }
 
@@ -41,9 +44,15 @@ class ThreadTeam {
   static std::pair<std::int64_t, std::int64_t> share(std::int64_t n, int thread, int size) {
     return {n * thread / size, n * (thread + 1) / size};
   }
-  // run() of body(begin, end) over the threads' shares of 0 .. n - 1.
+  // run() of body(begin, end) over the threads' shares of 0 .. n - 1; on the caller alone, body(0, n), when a
+  // share would hold fewer than `grain` items: waking the team costs microseconds, and every meeting of the
+  // threads is a chance to wait for one that another process holds off its core.
   template <class Body>
-  void for_each_share(std::int64_t n, Body&& body) {
+  void for_each_share(std::int64_t n, Body&& body, std::int64_t grain = 1) {
+    if (size_ == 1 || n < grain * size_) {
+      body(std::int64_t{0}, n);
+      return;
+    }
     run([&](int thread) {
       const auto [begin, end] = share(n, thread, size_);
       body(begin, end);
