@@ -41,7 +41,7 @@ Simulation& simulation_for(int threads) {
   return *s.simulation;
 }
 
-void BM_InternalForces(benchmark::State& state) {
+void internal_forces(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
   Simulation& simulation = simulation_for(threads);
   const Model& model = simulation.model();
@@ -68,6 +68,15 @@ void BM_InternalForces(benchmark::State& state) {
   state.counters["integration_points"] = ips;
   state.SetLabel(simd::current());
 }
+void BM_InternalForces(benchmark::State& state) { internal_forces(state); }
 BENCHMARK(BM_InternalForces)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The same on the portable baseline instruction set (no SIMD): what the vectorisation gives.
+void BM_InternalForcesBaseline(benchmark::State& state) {
+  simd::use("baseline");
+  internal_forces(state);
+  simd::use("best");
+}
+BENCHMARK(BM_InternalForcesBaseline)->Arg(1)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
