@@ -61,6 +61,16 @@ inline Mat3V zero_unless(DoubleMask admissible, const Mat3V& a) {
   return out;
 }
 
+// The law's result for lanes p ..: lanes whose stress is not finite (an F so extreme that S overflows, or C has
+// a round-off eigenvalue <= 0) are refused too; refused lanes carry S = 0.
+inline void store_stress(DoubleTag d, const Mat3V& S, DoubleMask admissible, StressBatch& batch, int p) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = i; j < 3; ++j)
+      admissible = hn::And(admissible, hn::Eq(hn::Sub(S.m[i][j], S.m[i][j]), hn::Zero(d)));
+  store_symmetric(d, zero_unless(admissible, S), batch.S, p);
+  store_admissible(d, admissible, batch.admissible, p);
+}
+
 // det F, expanded along the first row as Eigen's 3x3 determinant is.
 inline DoubleVec determinant(const Mat3V& a) {
   const auto& m = a.m;

@@ -19,7 +19,7 @@ void NeoHookeanStressBatch(const hyperelastic::NeoHookeanConstants& k, StressBat
   for (int p = 0; p < StressBatch::kCapacity; p += static_cast<int>(hn::Lanes(d))) {
     const Mat3V F = load_matrix(d, batch.F, p);
     const DoubleVec J = determinant(F);
-    DoubleMask ok = admissible(d, F, J);
+    const DoubleMask ok = admissible(d, F, J);
     const DoubleVec safe_J = hn::IfThenElse(ok, J, one);
     const DoubleVec inverse_J = hn::Div(one, safe_J);
     // F^-1 = adj(F) / J: (F^-1)_ij = cofactor_ji / J.
@@ -44,10 +44,8 @@ void NeoHookeanStressBatch(const hyperelastic::NeoHookeanConstants& k, StressBat
             hn::MulAdd(Fi.m[i][2], Fi.m[j][2], hn::MulAdd(Fi.m[i][1], Fi.m[j][1], hn::Mul(Fi.m[i][0], Fi.m[j][0])));
         S.m[i][j] = hn::Mul(coefficient, C_inverse);
         if (i == j) S.m[i][j] = hn::Add(S.m[i][j], shear);
-        ok = hn::And(ok, hn::Eq(hn::Sub(S.m[i][j], S.m[i][j]), hn::Zero(d)));  // S overflowed: refuse
       }
-    store_symmetric(d, zero_unless(ok, S), batch.S, p);
-    store_admissible(d, ok, batch.admissible, p);
+    store_stress(d, S, ok, batch, p);
   }
 }
 

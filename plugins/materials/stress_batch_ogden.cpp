@@ -22,7 +22,7 @@ void OgdenStressBatch(const hyperelastic::OgdenConstants& k, StressBatch& batch)
   for (int p = 0; p < StressBatch::kCapacity; p += static_cast<int>(hn::Lanes(d))) {
     const Mat3V F = load_matrix(d, batch.F, p);
     const DoubleVec J = determinant(F);
-    DoubleMask ok = admissible(d, F, J);
+    const DoubleMask ok = admissible(d, F, J);
     const DoubleVec safe_J = hn::IfThenElse(ok, J, hn::Set(d, 1.0));  // no log of J <= 0 in refused lanes
     const SymmetricEigen3V principal = symmetric_eigen3(d, right_cauchy_green(F));
     const DoubleVec log_J = hn::Log(d, safe_J);
@@ -37,12 +37,7 @@ void OgdenStressBatch(const hyperelastic::OgdenConstants& k, StressBatch& batch)
     DoubleVec principal_stress[3];
     for (int i = 0; i < 3; ++i)
       principal_stress[i] = hn::Div(hn::MulAdd(stress_factor, isochoric[i], a), principal.values[i]);
-    const Mat3V S = spectral_sum(principal, principal_stress);
-    // Not finite: an F so extreme that C has a round-off eigenvalue <= 0 or S overflows.
-    for (int i = 0; i < 3; ++i)
-      for (int j = i; j < 3; ++j) ok = hn::And(ok, hn::Eq(hn::Sub(S.m[i][j], S.m[i][j]), hn::Zero(d)));
-    store_symmetric(d, zero_unless(ok, S), batch.S, p);
-    store_admissible(d, ok, batch.admissible, p);
+    store_stress(d, spectral_sum(principal, principal_stress), ok, batch, p);
   }
 }
 
