@@ -6,7 +6,7 @@
 #include <iostream>
 
 #include "commands.hpp"
-#include "mtled/compare.hpp"
+#include "mtled/analysis/compare.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
 #include "svg.hpp"

@@ -24,7 +24,7 @@
 #include <thread>
 
 #include "commands.hpp"
-#include "mtled/compare.hpp"
+#include "mtled/analysis/compare.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
 #include "mtled/output.hpp"

@@ -368,9 +368,7 @@ void Simulation::check_energy(std::span<const double> u_new, double step_size) {
   // For a mode that grows, it grows too (in magnitude). Both in one pass over the nodes, shared by the team and
   // summed in thread order.
   if (!(step_size > 0.0)) return;
-  // External force drivers would need their own work; none of the shipped plugins has one.
-  const bool check = force_sets_.empty() && previous_step_size_ > 0.0;
-  const double scale = check ? 0.5 / (step_size * previous_step_size_) : 0.0;
+  const double scale = previous_step_size_ > 0.0 ? 0.5 / (step_size * previous_step_size_) : 0.0;
   ThreadTeam& team = model_->team();
   // A pass of a few operations per node: worth the team only on large clouds.
   const int parts = model_->node_count() >= 8192 * team.size() ? team.size() : 1;
@@ -410,7 +408,9 @@ void Simulation::check_energy(std::span<const double> u_new, double step_size) {
     }
   }
   work_bound_ += 0.5 * added / (step_size * step_size);
-  if (!check) return;
+  kinetic_energy_ = std::abs(kinetic);
+  // External force drivers would need their own work; none of the shipped plugins has one.
+  if (!force_sets_.empty() || !(previous_step_size_ > 0.0)) return;
   kinetic = std::abs(kinetic);
   // Kinetic plus strain energy never exceed the work put in (damping only removes energy), and the work is
   // bounded by the sum of |reaction x increment| accumulated above. A factor of 10 leaves room for the

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "mtled/analysis/result_file.hpp"
 #include "mtled/output.hpp"
 #include "test_support.hpp"
 

@@ -55,11 +55,4 @@ struct CellField {
 void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> displacement,
                const std::vector<CellField>& cell_fields);
 
-// What `mtled compare` reads back from a run's result.vtu.
-struct ResultField {
-  std::vector<Vec3> points;
-  std::vector<Vec3> displacement;
-};
-ResultField read_result_vtu(const std::filesystem::path& file);
-
 }  // namespace mtled

@@ -57,6 +57,9 @@ class Simulation final : public DiscreteSystem {
   const ConstraintSystem& constraints() const { return *constraint_system_; }
   double unscaled_stable_time_step() const { return unscaled_stable_time_step_; }
   long force_evaluations() const { return force_evaluations_; }
+  // Kinetic energy at the last step (J), the form central differences conserve: 1/2 v(n-1/2) . M v(n+1/2), the
+  // product of the half-step velocities around it (0 before the second step).
+  double kinetic_energy() const { return kinetic_energy_; }
   // Interpolated displacement at every node (3 per node).
   std::vector<double> interpolated_displacement() const;
   // The stable-step monitor's record for summary.json (null when /monitors/stable_step_every_steps is 0).
@@ -91,6 +94,7 @@ class Simulation final : public DiscreteSystem {
   // Bound on the work the constraints have done (J): sum of |reaction . increment of the prescribed value| and of
   // |kinetic energy the constraint projection added|.
   double work_bound_ = 0.0;
+  double kinetic_energy_ = 0.0;
   double previous_step_size_ = 0.0;
   // Per-thread parts of check_energy's sums.
   struct EnergySums {

@@ -1,4 +1,4 @@
-#include "mtled/compare.hpp"
+#include "mtled/analysis/compare.hpp"
 
 #include <fmt/format.h>
 
@@ -7,7 +7,7 @@
 #include <fstream>
 
 #include "mtled/errors.hpp"
-#include "mtled/output.hpp"
+#include "mtled/analysis/result_file.hpp"
 #include "mtled/point_search.hpp"
 
 namespace fs = std::filesystem;
@@ -19,28 +19,6 @@ const char* const kNrmseDefinition =
     "RMSE = sqrt(mean of the squared node-by-node differences); A is interpolated onto B's nodes (MLS) when "
     "the node clouds differ. The paper prints the 1/N outside the root (a typo: that value shrinks with the "
     "node count); nrmse_paper_formula gives that literal value, NRMSE / sqrt(N).";
-
-fs::path result_file_of(const fs::path& run) {
-  std::error_code ec;
-  if (!fs::exists(run, ec))
-    throw InputError(run.string(), "no such run folder or result file");
-  if (!fs::is_directory(run, ec)) return run;
-  const fs::path file = run / "result.vtu";
-  if (fs::exists(file, ec)) return file;
-  std::string status;
-  if (std::ifstream in(run / "summary.json"); in) {
-    try {
-      status = json::parse(in).value("status", "");
-    } catch (const std::exception&) {
-      status.clear();
-    }
-  }
-  throw InputError(file.string(), status.empty() || status == "ok"
-                                      ? "missing: not an mtled run folder, or its run did not finish"
-                                      : fmt::format("missing: the run's summary.json says status \"{}\", so it wrote "
-                                                    "no result",
-                                                    status));
-}
 
 std::vector<Vec3> interpolate_displacements(const std::vector<Vec3>& nodes, const std::vector<Vec3>& displacement,
                                             const std::vector<Vec3>& points, PluginCatalog& catalog) {

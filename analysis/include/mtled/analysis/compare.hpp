@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "mtled/json.hpp"
+#include "mtled/analysis/result_file.hpp"
 #include "mtled/plugin_catalog.hpp"
 
 namespace mtled {
@@ -33,10 +34,6 @@ extern const char* const kNrmseDefinition;
 // to its 10th nearest neighbour (about 20 nodes per support). A missing folder or result file, or a
 // folder whose run did not finish, throws InputError naming the path.
 Comparison compare_runs(const std::filesystem::path& a, const std::filesystem::path& b, PluginCatalog& catalog);
-
-// The result file of a run folder (folder/result.vtu) or the file itself; InputError naming the path when
-// it does not exist (with the run's status from summary.json when the folder has one).
-std::filesystem::path result_file_of(const std::filesystem::path& run);
 
 // What `mtled compare --json` prints: nrmse, rmse_m, max_abs_difference_m, range_m (each {ux, uy, uz}),
 // abs_difference_quantiles_m (p50, p90, p99 of |u_A - u_B|, nearest rank, each {ux, uy, uz, magnitude}),
