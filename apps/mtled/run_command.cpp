@@ -177,7 +177,7 @@ int run_scene(const RunOptions& options) {
     summary["stable_time_step_s"] = simulation->unscaled_stable_time_step();
     summary["constraint_factorisations"] = simulation->constraints().factorisations();
     summary["force_evaluations"] = simulation->force_evaluations();
-    summary["stable_step_monitor"] = simulation->stable_step_report();
+    summary["monitors"] = simulation->monitor_reports();
     summary["ip_updates_per_s"] = solve_time > 0 ? static_cast<double>(simulation->force_evaluations()) *
                                                        model.integration_point_count() / solve_time
                                                  : 0.0;

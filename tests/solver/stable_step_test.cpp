@@ -1,4 +1,4 @@
-// The stable-step monitor (Simulation::check_stable_step, scene section "monitors"): its Lanczos estimate of
+// The stable-step monitor (core/src/monitors/stable_step_monitor.cpp, scene section "monitors"): its Lanczos estimate of
 // 2 / sqrt(lambda_max(M^-1 K)) against the exact value from a K assembled column by column, the setup's
 // per-point bound against the same, detection of a time step above it, and no effect on the results.
 #include <gtest/gtest.h>
@@ -80,7 +80,7 @@ TEST(StableStepMonitor, LanczosEstimateMatchesTheAssembledSpectrum) {
                                             {{"stable_step_every_steps", 1000000}}, false));
   Simulation simulation(scene, test::catalog());
   simulation.run(nullptr);
-  const json report = simulation.stable_step_report();
+  const json report = simulation.monitor_reports().at("stable_step");
   ASSERT_EQ(report.at("checks").get<long>(), 1);
   const double estimate = report.at("last_estimate_s").get<double>();
   const double exact = exact_stable_step(simulation);
@@ -151,7 +151,7 @@ TEST(StableStepMonitor, ConstrainedEstimateMatchesTheConstrainedSpectrum) {
                                             {{"stable_step_every_steps", 1000000}}, true, 0.0));
   Simulation simulation(scene, test::catalog());
   simulation.run(nullptr);
-  const json report = simulation.stable_step_report();
+  const json report = simulation.monitor_reports().at("stable_step");
   ASSERT_EQ(report.at("checks").get<long>(), 1);
   const double estimate = report.at("last_estimate_s").get<double>();
   const double exact = exact_stable_step(simulation, true);
@@ -187,7 +187,7 @@ TEST(StableStepMonitor, ChangesNothingInTheResults) {
                                               {{"stable_step_every_steps", every}}, true));
     Simulation simulation(scene, test::catalog());
     simulation.run(nullptr);
-    EXPECT_EQ(simulation.stable_step_report().is_null(), every == 0);
+    EXPECT_EQ(simulation.monitor_reports().contains("stable_step"), every != 0);
     return std::vector<double>(simulation.displacement().begin(), simulation.displacement().end());
   };
   EXPECT_EQ(final_state(0), final_state(50));  // bitwise: the monitor only reads the state

@@ -1,7 +1,7 @@
 #pragma once
 // A scene built into a running simulation: the mesh, the meshless model, the drivers (boundary conditions
-// and the needle), the integrator and the state. Integrators advance the state through the services
-// below; the kernel's loop (run) checks stability and calls the observer between steps.
+// and the needle), the integrator, the monitors and the state. Integrators advance the state through the
+// DiscreteSystem below; the kernel's loop (run) calls the monitors and the observer after each step.
 #include <functional>
 #include <memory>
 #include <span>
@@ -11,6 +11,7 @@
 #include "mtled/interfaces/integrator.hpp"
 #include "mtled/json.hpp"
 #include "mtled/model.hpp"
+#include "mtled/monitor.hpp"
 #include "mtled/scene.hpp"
 
 namespace mtled {
@@ -57,22 +58,21 @@ class Simulation final : public DiscreteSystem {
   const ConstraintSystem& constraints() const { return *constraint_system_; }
   double unscaled_stable_time_step() const { return unscaled_stable_time_step_; }
   long force_evaluations() const { return force_evaluations_; }
-  // Kinetic energy at the last step (J), the form central differences conserve: 1/2 v(n-1/2) . M v(n+1/2), the
-  // product of the half-step velocities around it (0 before the second step).
-  double kinetic_energy() const { return kinetic_energy_; }
+  // Kinetic energy at the last step (J), the energy monitor's: 1/2 v(n-1/2) . M v(n+1/2), the form central
+  // differences conserve (0 before the second step).
+  double kinetic_energy() const;
+  // The step just completed, as the monitors see it.
+  StepRecord last_step() const;
   // Interpolated displacement at every node (3 per node).
   std::vector<double> interpolated_displacement() const;
-  // The stable-step monitor's record for summary.json (null when /monitors/stable_step_every_steps is 0).
-  json stable_step_report() const;
+  // Every monitor's record for summary.json, by name: "energy" always, "stable_step" when
+  // /monitors/stable_step_every_steps is not 0.
+  json monitor_reports() const;
 
  private:
   void update_drivers();
+  // Stops the run (InstabilityError "non_finite") when the integrator's update is not finite.
   void check_finite(std::span<const double> u_new, double new_time) const;
-  // Stops the run (InstabilityError "energy_growth") when the kinetic energy exceeds what the loads put in.
-  void check_energy(std::span<const double> u_new, double step_size);
-  // Stops the run (InstabilityError "time_step_above_stable") when the step exceeds 2 / sqrt(lambda_max) of
-  // M^-1 K at the current state, lambda_max estimated by Lanczos iteration on force differences.
-  void check_stable_step(double step_size);
 
   std::unique_ptr<Model> model_;
   std::vector<std::shared_ptr<BoundaryCondition>> boundaries_;
@@ -91,26 +91,11 @@ class Simulation final : public DiscreteSystem {
   double unscaled_stable_time_step_ = 0.0;
   long force_evaluations_ = 0;
   std::vector<std::vector<Vec3>> previous_values_;  // prescribed values of the previous step, per set
-  // Bound on the work the constraints have done (J): sum of |reaction . increment of the prescribed value| and of
-  // |kinetic energy the constraint projection added|.
-  double work_bound_ = 0.0;
-  double kinetic_energy_ = 0.0;
-  double previous_step_size_ = 0.0;
-  // Per-thread parts of check_energy's sums.
-  struct EnergySums {
-    double added = 0.0, kinetic = 0.0, fastest_energy = 0.0;
-    Index fastest = 0;
-  };
-  std::vector<EnergySums> energy_sums_;
+  std::vector<double> u_before_;                    // the displacements a step before u_previous_
   std::vector<double> u_free_;  // this step's displacements before the constraint projection
-
-  long stable_step_every_ = 0;
-  int stable_step_iterations_ = 0;
-  double perturbation_length_ = 0.0;  // largest nodal perturbation of the force differences (m)
-  std::vector<double> mode_;          // the last Ritz vector of the fastest mode, the next check's start
-  long stable_step_checks_ = 0, monitor_force_evaluations_ = 0;
-  double last_stable_step_ = 0.0, smallest_stable_step_ = INFINITY;
-  long smallest_stable_step_at_ = 0;
+  double step_size_ = 0.0, previous_step_size_ = 0.0;
+  std::vector<std::unique_ptr<StepMonitor>> monitors_;
+  const class EnergyMonitor* energy_ = nullptr;  // among monitors_: always on
 };
 
 }  // namespace mtled

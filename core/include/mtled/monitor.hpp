@@ -1,0 +1,47 @@
+#pragma once
+// Checks the time loop runs after every completed step, each its own small component (in the spirit of
+// PETSc's TSMonitorSet): a monitor reads the step just taken, keeps whatever state it needs between steps,
+// stops the run by throwing InstabilityError, and reports its own record into summary.json
+// ("monitors": {name: record}). The step itself knows none of them.
+#include <span>
+#include <string>
+#include <vector>
+
+#include "mtled/json.hpp"
+#include "mtled/types.hpp"
+
+namespace mtled {
+
+class Model;
+class ConstraintSystem;
+struct NodalConstraints;
+
+// A completed step n -> n + 1, as a monitor sees it.
+struct StepRecord {
+  long step = 0;            // n + 1
+  double time = 0.0;        // s, at n + 1
+  double step_size = 0.0;   // t(n+1) - t(n)
+  double previous_step_size = 0.0;  // t(n) - t(n-1); 0 at the first step
+  std::span<const double> u, u_previous, u_before;  // displacements at n + 1, n and n - 1 (3 per node)
+  std::span<const double> u_free;                   // n + 1 before the constraint projection
+  std::span<const double> mass;                     // per node, as the integrator uses it
+  const Model* model = nullptr;
+  const ConstraintSystem* constraints = nullptr;
+  const std::vector<NodalConstraints*>* constraint_sets = nullptr;
+  const std::vector<std::vector<Vec3>>* previous_values = nullptr;  // the sets' prescribed values at n
+  bool external_forces = false;                                      // some driver applies forces
+  double stable_time_step = 0.0;  // the setup bound for the masses in use (before the integrator's factor)
+  double time_step_factor = 1.0;  // the integrator's
+};
+
+class StepMonitor {
+ public:
+  virtual ~StepMonitor();
+  virtual std::string name() const = 0;
+  // Throws InstabilityError (naming the step, what and where) to stop the run.
+  virtual void after_step(const StepRecord& step) = 0;
+  // Its record for summary.json.
+  virtual json report() const = 0;
+};
+
+}  // namespace mtled

@@ -1,0 +1,129 @@
+#include "stable_step_monitor.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include "instability.hpp"
+#include "mtled/constraints.hpp"
+#include "mtled/log.hpp"
+
+namespace mtled {
+
+void StableStepMonitor::check(const StepRecord& step) {
+  setup_estimate_ = step.stable_time_step;
+  const Model& model = *step.model;
+  const ConstraintSystem& constraints = *step.constraints;
+  const auto mass = step.mass;
+  const double step_size = step.step_size;
+  // The largest eigenvalue of K v = lambda M v at the current state by Lanczos iteration on
+  // A = M^-1/2 K M^-1/2 (full reorthogonalisation; a few dozen vectors), with A q from a forward difference of
+  // the internal forces. Were K symmetric, the Ritz values would approach lambda_max from below and the estimate
+  // could only overstate the stable step; variationally consistent integration makes K slightly unsymmetric,
+  // and the estimate then lands within a few percent of 2 / sqrt(spectral radius) on either side
+  // (tests/solver/stable_step_test.cpp). A run is stopped only when its step exceeds the estimate by 5%, so a
+  // run that would finish is not stopped; beyond that margin the central-difference update (and dynamic
+  // relaxation's, whose limit is the same as its damping vanishes) is unstable. The iteration runs in the
+  // constrained subspace (every vector projected as the constraint correction projects each step's update,
+  // ConstraintSystem::project_out): a mode that the constraints hold still, such as the tissue between the
+  // driven points around a needle, cannot grow. The next check starts from this one's Ritz vector; the first,
+  // from a random vector, uses three times as many.
+  const std::size_t dofs = step.u.size();
+  if (mode_.empty()) {
+    // A fixed pseudo-random start (reproducible runs) with a component along every mode.
+    mode_.resize(dofs);
+    std::uint64_t state = 0x9E3779B97F4A7C15ULL;
+    for (double& x : mode_) {
+      state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+      x = static_cast<double>(state >> 11) / 9007199254740992.0 - 0.5;
+    }
+  }
+  std::vector<double> f0(dofs), f1(dofs), perturbed(dofs), root_mass(dofs);
+  for (std::size_t d = 0; d < dofs; ++d) root_mass[d] = std::sqrt(mass[d / 3]);
+  if (model.internal_forces(step.u, f0) >= 0) return;  // an inadmissible state is the other monitors' business
+  ++force_evaluations_;
+
+  // A random start needs more vectors than a warm one to resolve the top of the spectrum.
+  const int size = checks_ == 0 ? 3 * iterations_ : iterations_;
+  Eigen::MatrixXd q(static_cast<Eigen::Index>(dofs), size);
+  Eigen::VectorXd alpha(size), beta(size);
+  Eigen::VectorXd w(static_cast<Eigen::Index>(dofs));
+  std::vector<double> increment(mode_);  // a displacement increment, projected into the constrained subspace
+  constraints.project_out(increment);
+  for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
+  if (!(w.norm() > 0.0)) return;
+  q.col(0) = w / w.norm();
+  int built = 0;
+  for (int j = 0; j < size; ++j) {
+    // w = A q_j = M^-1/2 K M^-1/2 q_j, K x ~ (f(u + epsilon x) - f(u)) / epsilon
+    double largest = 0.0;
+    for (std::size_t d = 0; d < dofs; ++d) largest = std::max(largest, std::abs(q(static_cast<Eigen::Index>(d), j) / root_mass[d]));
+    const double epsilon = perturbation_length_ / largest;
+    for (std::size_t d = 0; d < dofs; ++d)
+      perturbed[d] = step.u[d] + epsilon * q(static_cast<Eigen::Index>(d), j) / root_mass[d];
+    ++force_evaluations_;
+    if (model.internal_forces(perturbed, f1) >= 0) return;
+    // M^-1 K x, projected, then back to the symmetric form: w = M^1/2 P M^-1 K x.
+    for (std::size_t d = 0; d < dofs; ++d) increment[d] = (f1[d] - f0[d]) / (epsilon * mass[d / 3]);
+    constraints.project_out(increment);
+    for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
+    alpha[j] = q.col(j).dot(w);
+    built = j + 1;
+    // Full reorthogonalisation, twice (the forward difference makes A slightly unsymmetric).
+    for (int pass = 0; pass < 2; ++pass) w -= q.leftCols(built) * (q.leftCols(built).transpose() * w);
+    beta[j] = w.norm();
+    if (j + 1 == size || !(beta[j] > 1e-10 * std::abs(alpha[j]))) break;
+    q.col(j + 1) = w / beta[j];
+  }
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(built, built);
+  for (int j = 0; j < built; ++j) {
+    t(j, j) = alpha[j];
+    if (j + 1 < built) t(j, j + 1) = t(j + 1, j) = beta[j];
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(t);
+  const double lambda = ritz.eigenvalues()[built - 1];
+  if (!(lambda > 0.0) || !std::isfinite(lambda)) return;
+  const Eigen::VectorXd vector = q.leftCols(built) * ritz.eigenvectors().col(built - 1);
+  for (std::size_t d = 0; d < dofs; ++d) mode_[d] = vector[static_cast<Eigen::Index>(d)] / root_mass[d];
+
+  ++checks_;
+  last_stable_step_ = 2.0 / std::sqrt(lambda);
+  if (last_stable_step_ < smallest_stable_step_) {
+    smallest_stable_step_ = last_stable_step_;
+    smallest_stable_step_at_ = step.step;
+  }
+  log().debug("step {}: stable step re-estimated {:.4g} s (time step {:.4g} s)", step.step, last_stable_step_,
+              step_size);
+  constexpr double kMargin = 1.05;
+  if (!(step_size > kMargin * last_stable_step_)) return;
+  // Where the fastest mode lives: the node with the largest share of it.
+  Index where = 0;
+  double share = 0.0;
+  for (std::size_t d = 0; d < dofs; ++d)
+    if (std::abs(mode_[d]) > share) {
+      share = std::abs(mode_[d]);
+      where = static_cast<Index>(d / 3);
+    }
+  throw node_instability(
+      step.step, step.time, "time_step_above_stable",
+      fmt::format("the time step {:.4g} s exceeds the stable step of the current state, {:.4g} s = "
+                  "2 / sqrt(lambda_max(M^-1 K)) re-estimated at step {} ({:.3g} times the setup estimate {:.4g} s); "
+                  "its fastest mode is largest at node {} at {} m; reduce /integrator/time_step_factor to {:.2g} or "
+                  "less",
+                  step_size, last_stable_step_, step.step, last_stable_step_ / step.stable_time_step, step.stable_time_step,
+                  where, point_text(model.nodes()[where]), 0.9 * last_stable_step_ / step_size * step.time_step_factor),
+      model, where);
+}
+
+json StableStepMonitor::report() const {
+  json j = {{"every_steps", every_},
+            {"checks", checks_},
+            {"force_evaluations", force_evaluations_},
+            {"setup_estimate_s", setup_estimate_}};
+  if (checks_ > 0) {
+    j["last_estimate_s"] = last_stable_step_;
+    j["smallest_estimate_s"] = smallest_stable_step_;
+    j["smallest_estimate_step"] = smallest_stable_step_at_;
+  }
+  return j;
+}
+
+}  // namespace mtled

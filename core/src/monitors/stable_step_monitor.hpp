@@ -1,0 +1,36 @@
+#pragma once
+// /monitors/stable_step_every_steps: re-estimates the stable step of the current, deformed body,
+// 2 / sqrt(lambda_max(M^-1 K)), at step 1 and every that many steps, and stops the run (InstabilityError
+// "time_step_above_stable") when the time step exceeds it by more than 5% (docs/stability.md).
+#include <cmath>
+#include <vector>
+
+#include "mtled/monitor.hpp"
+
+namespace mtled {
+
+class StableStepMonitor final : public StepMonitor {
+ public:
+  // `perturbation_length`: the largest nodal perturbation of the force differences (m).
+  StableStepMonitor(long every, int iterations, double perturbation_length)
+      : every_(every), iterations_(iterations), perturbation_length_(perturbation_length) {}
+  std::string name() const override { return "stable_step"; }
+  void after_step(const StepRecord& step) override {
+    if (step.step == 1 || step.step % every_ == 0) check(step);
+  }
+  json report() const override;
+
+ private:
+  void check(const StepRecord& step);
+
+  long every_;
+  int iterations_;
+  double perturbation_length_;
+  double setup_estimate_ = 0.0;
+  std::vector<double> mode_;  // the last Ritz vector of the fastest mode, the next check's start
+  long checks_ = 0, force_evaluations_ = 0;
+  double last_stable_step_ = 0.0, smallest_stable_step_ = INFINITY;
+  long smallest_stable_step_at_ = 0;
+};
+
+}  // namespace mtled
