@@ -8,6 +8,7 @@
 
 #include "mtled/errors.hpp"
 #include "mtled/analysis/result_file.hpp"
+#include "mtled/analysis/svg.hpp"
 #include "mtled/point_search.hpp"
 
 namespace fs = std::filesystem;
@@ -149,6 +150,24 @@ json comparison_json(const Comparison& c) {
                                            : json(nullptr)},
           {"run_a", c.file_a.string()},
           {"run_b", c.file_b.string()}};
+}
+
+void write_comparison_histograms(std::ostream& out, const Comparison& c, const std::string& name_a,
+                                 const std::string& name_b, int bins) {
+  static const char* const kComponents[] = {"u_x", "u_y", "u_z"};
+  std::vector<svg::HistogramPanel> panels(3);
+  for (int k = 0; k < 3; ++k) {
+    panels[static_cast<std::size_t>(k)].title =
+        fmt::format("{}: NRMSE {:.3g}, max |diff| {:.3g} m", kComponents[k], c.nrmse[k], c.max_abs_difference[k]);
+    panels[static_cast<std::size_t>(k)].x_label = fmt::format("{0}(A) - {0}(B) (m)", kComponents[k]);
+    panels[static_cast<std::size_t>(k)].values.reserve(c.differences.size());
+    for (const Vec3& d : c.differences) panels[static_cast<std::size_t>(k)].values.push_back(d[k]);
+  }
+  const std::string heading = fmt::format("Node-by-node displacement differences, A = {}, B = {}", name_a, name_b);
+  const std::string subheading =
+      fmt::format("{} nodes of B{}; NRMSE = RMSE(u_A - u_B) / (max u_B - min u_B), RMSE = sqrt(mean of squares)",
+                  c.nodes, c.interpolated ? fmt::format(", A ({} nodes) interpolated onto them with MLS", c.nodes_a) : "");
+  svg::write_histograms(out, panels, heading, subheading, bins);
 }
 
 }  // namespace mtled

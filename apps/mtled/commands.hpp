@@ -47,14 +47,3 @@ int compare_command(const CompareOptions& options, const std::vector<std::filesy
 int study_command(const StudyOptions& options);
 
 }  // namespace mtled::app
-
-namespace mtled {
-struct Comparison;
-}
-
-namespace mtled::app {
-// Histograms of a comparison's node-by-node differences, one panel per component (SVG).
-void write_comparison_histograms(std::ostream& out, const Comparison& comparison, const std::string& name_a,
-                                 const std::string& name_b, int bins);
-
-}  // namespace mtled::app

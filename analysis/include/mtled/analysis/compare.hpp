@@ -3,6 +3,8 @@
 // A's interpolated displacements are carried onto B's nodes (MLS when the clouds differ) and the
 // node-by-node differences summarised per component.
 #include <filesystem>
+#include <ostream>
+#include <string>
 #include <vector>
 
 #include "mtled/json.hpp"
@@ -43,5 +45,10 @@ json comparison_json(const Comparison& comparison);
 // The displacement differences of A carried onto points: exposed for tests.
 std::vector<Vec3> interpolate_displacements(const std::vector<Vec3>& nodes, const std::vector<Vec3>& displacement,
                                             const std::vector<Vec3>& points, PluginCatalog& catalog);
+
+// Histograms of a comparison's node-by-node differences, one panel per component (SVG; the paper's Figs. 10,
+// 12, 21 and 23).
+void write_comparison_histograms(std::ostream& out, const Comparison& comparison, const std::string& name_a,
+                                 const std::string& name_b, int bins);
 
 }  // namespace mtled

@@ -1,4 +1,4 @@
-#include "svg.hpp"
+#include "mtled/analysis/svg.hpp"
 
 #include <fmt/format.h>
 
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <limits>
 
-namespace mtled::app::svg {
+namespace mtled::svg {
 
 namespace {
 
@@ -272,4 +272,4 @@ void write_loglog_plot(std::ostream& out, const std::vector<PlotPoint>& points, 
   out << "</svg>\n";
 }
 
-}  // namespace mtled::app::svg
+}  // namespace mtled::svg

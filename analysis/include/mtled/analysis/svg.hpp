@@ -7,7 +7,7 @@
 #include <string_view>
 #include <vector>
 
-namespace mtled::app::svg {
+namespace mtled::svg {
 
 // Escapes &, <, >, " and ' for XML text and attribute values.
 std::string escape(std::string_view text);
@@ -33,4 +33,4 @@ struct PlotPoint {
 void write_loglog_plot(std::ostream& out, const std::vector<PlotPoint>& points, const std::string& title,
                        const std::string& x_label, const std::string& y_label, const std::vector<std::string>& notes);
 
-}  // namespace mtled::app::svg
+}  // namespace mtled::svg

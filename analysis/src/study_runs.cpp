@@ -1,0 +1,173 @@
+// A study's runs: each configuration is a child `mtled run` process with its own folder and log, so a run that
+// fails (exit 3, a crash, a timeout) is recorded with its status and the study goes on.
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <thread>
+
+#include "mtled/analysis/study.hpp"
+#include "study_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace mtled::study {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct ChildOutcome {
+  int exit_code = -1;
+  int signal = 0;
+  bool timed_out = false;
+  double elapsed_s = 0.0;
+  double max_rss_mb = 0.0;
+};
+
+ChildOutcome run_child(const fs::path& executable, const std::vector<std::string>& arguments, const fs::path& log_file,
+                       double timeout_s) {
+  std::vector<std::string> args{executable.string()};
+  args.insert(args.end(), arguments.begin(), arguments.end());
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const std::string log_path = log_file.string();
+
+  const auto start = Clock::now();
+  const pid_t pid = ::fork();
+  if (pid < 0) throw std::runtime_error(fmt::format("cannot start a run: fork failed ({})", std::strerror(errno)));
+  if (pid == 0) {  // the child: only async-signal-safe calls until exec
+    const int fd = ::open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      ::dup2(fd, STDOUT_FILENO);
+      ::dup2(fd, STDERR_FILENO);
+      ::close(fd);
+    }
+    const int null = ::open("/dev/null", O_RDONLY);
+    if (null >= 0) ::dup2(null, STDIN_FILENO);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  ChildOutcome outcome;
+  int status = 0;
+  rusage usage{};
+  bool terminated = false;
+  while (true) {
+    const pid_t done = ::wait4(pid, &status, timeout_s > 0.0 ? WNOHANG : 0, &usage);
+    if (done == pid) break;
+    if (done < 0 && errno != EINTR) throw std::runtime_error(fmt::format("waiting for a run failed ({})", std::strerror(errno)));
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    if (timeout_s > 0.0 && elapsed > timeout_s && !terminated) {
+      ::kill(pid, SIGTERM);  // mtled run writes summary.json with status "interrupted" and exits
+      terminated = outcome.timed_out = true;
+    }
+    if (terminated && elapsed > timeout_s + 30.0) ::kill(pid, SIGKILL);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  outcome.elapsed_s = std::chrono::duration<double>(Clock::now() - start).count();
+  outcome.max_rss_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
+  if (WIFEXITED(status)) outcome.exit_code = WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) outcome.signal = WTERMSIG(status);
+  return outcome;
+}
+
+void fill(Row& row, const json& summary) {
+  row.summary = summary;
+  row.status = summary.is_object() ? summary.value("status", "") : "";
+  row.setup_s = number_or_nan(summary, "setup_time_s");
+  row.solve_s = number_or_nan(summary, "solve_time_s");
+  row.wall_s = number_or_nan(summary, "wall_time_s");
+  row.peak_mb = number_or_nan(summary, "peak_rss_mb");
+  if (summary.is_object()) {
+    row.steps = summary.value("steps", -1L);
+    row.nodes = summary.value("nodes", -1L);
+    row.integration_points = summary.value("integration_points", -1L);
+  }
+}
+
+
+// The row's status and message from how the child ended and what its summary says.
+void explain_failure(Row& row, const ChildOutcome& outcome, double timeout_s, const fs::path& folder) {
+  const json& summary = row.summary;
+  if (outcome.timed_out) {
+    row.status = "timeout";
+    row.message = fmt::format("stopped after the study's timeout_s = {:g} s", timeout_s);
+  } else if (outcome.signal) {
+    row.status = "crashed";
+    row.message = fmt::format("killed by signal {}", outcome.signal);
+  } else if (row.status.empty() || row.status == "running" || (row.status == "ok" && outcome.exit_code != 0)) {
+    row.status = "failed";
+  }
+  if (row.status != "ok" && row.message.empty()) {
+    if (summary.contains("diagnostic")) {
+      const json& d = summary["diagnostic"];
+      row.message = d.value("detail", "");
+      row.note = fmt::format("{} at step {}", d.value("what", "?"), d.value("step", 0L));
+    } else if (summary.contains("error") && summary["error"].is_string()) {
+      row.message = summary["error"].get<std::string>();
+    } else {
+      row.message = fmt::format("exit code {}; see {}", row.exit_code, (folder / "mtled.log").string());
+    }
+  }
+  if (row.note.empty()) row.note = row.message.size() > 80 ? row.message.substr(0, 77) + "..." : row.message;
+}
+
+}  // namespace
+
+Runner::Runner(const Study& study, const Settings& settings, const fs::path& output)
+    : study_(study), settings_(settings), runs_(output / "runs"), executable_(fs::read_symlink("/proc/self/exe")),
+      threads_(settings.threads > 0 ? settings.threads : study.threads) {}
+
+Row Runner::reused(const Configuration& c, const std::string& counter) const {
+  Row row;
+  row.configuration = &c;
+  const fs::path folder = runs_ / c.folder;
+  const json summary = read_json_file(folder / "summary.json");
+  if (summary.is_object() && summary.value("status", "") == "ok" &&
+      summary.value("scene", "") == fs::absolute(study_.scene).string() &&
+      summary.value("overrides", json()) == json(c.overrides) && fs::exists(folder / "result.vtu")) {
+    row.reused = true;
+    row.exit_code = 0;
+    fill(row, summary);
+    fmt::print(stderr, "study {} {}: reused the earlier run in {}\n", counter, c.label, folder.string());
+  }
+  return row;
+}
+
+Row Runner::run(const Configuration& c, const std::string& counter) {
+  const fs::path folder = runs_ / c.folder;
+  const fs::path scene = fs::absolute(study_.scene);
+  if (settings_.reuse) {
+    Row row = reused(c, counter);
+    if (row.reused) return row;
+  }
+  std::error_code ec;
+  fs::remove_all(folder, ec);
+  fs::create_directories(folder);
+  std::vector<std::string> arguments{"run", scene.string(), "-o", folder.string(), "--no-progress",
+                                     "--log-level", settings_.log_level};
+  for (const auto& o : c.overrides) arguments.insert(arguments.end(), {"--set", o});
+  if (threads_ > 0) arguments.insert(arguments.end(), {"--threads", std::to_string(threads_)});
+  for (const auto& p : settings_.plugin_paths) arguments.insert(arguments.end(), {"--plugin-path", fs::absolute(p).string()});
+  fmt::print(stderr, "study {} {}: running\n", counter, c.label);
+  Row row;
+  row.configuration = &c;
+  const ChildOutcome outcome = run_child(executable_, arguments, folder / "mtled.log", study_.timeout_s);
+  row.exit_code = outcome.signal ? 128 + outcome.signal : outcome.exit_code;
+  const json summary = read_json_file(folder / "summary.json");
+  fill(row, summary);
+  if (std::isnan(row.wall_s)) row.wall_s = outcome.elapsed_s;
+  if (std::isnan(row.peak_mb)) row.peak_mb = outcome.max_rss_mb;
+  explain_failure(row, outcome, study_.timeout_s, folder);
+  return row;
+}
+
+
+}  // namespace mtled::study
