@@ -130,76 +130,99 @@ class RunObserver final : public StepObserver {
 
 }  // namespace
 
-int run_scene(const RunOptions& options) {
-  const auto wall_start = Clock::now();
-  SceneDocument document = read_scene(options.scene.scene, options.scene.overrides);
-  PluginCatalog catalog(plugin_search_path(options.scene.plugin_paths, scene_plugin_paths(document)));
-  const Scene scene = validate_scene(std::move(document), catalog);
+namespace {
 
-  const fs::path output = options.output.empty() ? fs::path("out") / options.scene.scene.stem() : options.output;
-  const OutputFolder folder(output);
-  folder.clear_previous_outputs();
+// --threads, else OMP_NUM_THREADS when set (the OpenMP convention), else every core.
+int thread_count(const RunOptions& options) {
+  if (options.threads > 0) return options.threads;
+  if (std::getenv("OMP_NUM_THREADS")) return omp_get_max_threads();
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
 
-  // --threads, else OMP_NUM_THREADS when set (the OpenMP convention), else every core.
-  const int threads = options.threads > 0               ? options.threads
-                      : std::getenv("OMP_NUM_THREADS") ? omp_get_max_threads()
-                                                        : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  omp_set_num_threads(threads);
+// One `mtled run`: the output folder, summary.json as it grows, the simulation and its observer. summary.json is
+// written first with status "running" and last with the outcome, so it always says how the run ended.
+class SceneRun {
+ public:
+  SceneRun(const RunOptions& options, const Scene& scene, PluginCatalog& catalog, Clock::time_point wall_start)
+      : wall_start_(wall_start),
+        scene_(scene),
+        catalog_(catalog),
+        folder_(options.output.empty() ? fs::path("out") / options.scene.scene.stem() : options.output) {
+    folder_.clear_previous_outputs();
+    const int threads = thread_count(options);
+    omp_set_num_threads(threads);
+    summary_ = {{"status", "running"},
+                {"mtled_version", MTLED_VERSION_STRING},
+                {"scene", fs::absolute(options.scene.scene).string()},
+                {"overrides", options.scene.overrides},
+                {"threads", threads},
+                {"simd", simd::current()}};
+    write_summary();
+  }
 
-  json summary = {{"status", "running"},
-                  {"mtled_version", MTLED_VERSION_STRING},
-                  {"scene", fs::absolute(options.scene.scene).string()},
-                  {"overrides", options.scene.overrides},
-                  {"threads", threads},
-                  {"simd", simd::current()}};
-  auto write_summary = [&] { folder.write_file("summary.json", [&](std::ostream& out) { out << summary.dump(2) << "\n"; }); };
-  write_summary();
+  int run(bool progress) {
+    try {
+      const auto setup_start = Clock::now();
+      simulation_ = std::make_unique<Simulation>(scene_, catalog_);
+      setup_time_ = seconds_since(setup_start);
+      log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time_, simulation_->unscaled_stable_time_step());
+      observer_ = std::make_unique<RunObserver>(folder_, *simulation_, scene_.output, progress);
+      solve_start_ = Clock::now();
+      simulation_->run(observer_.get());
+      observer_->finish(*simulation_);
+    } catch (const InstabilityError& e) {
+      return unstable(e);
+    } catch (const Interrupted&) {
+      return finish_without_result("interrupted", seconds_since(solve_start_), "");
+    } catch (const InputError& e) {
+      const InputError located = locate_problems(e, scene_.document);
+      finish_without_result("invalid_input", 0.0, located.what());
+      throw located;
+    } catch (const std::exception& e) {
+      finish_without_result("failed", 0.0, e.what());
+      throw;
+    }
+    return succeeded(seconds_since(solve_start_));
+  }
 
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
-  std::unique_ptr<Simulation> simulation;
-  std::unique_ptr<RunObserver> observer;
-  auto fill_common = [&](double setup_time, double solve_time) {
-    summary["plugins_loaded"] = catalog.loaded_files();
-    summary["setup_time_s"] = setup_time;
-    summary["solve_time_s"] = solve_time;
-    summary["wall_time_s"] = seconds_since(wall_start);
-    summary["peak_rss_mb"] = peak_rss_mb();
-    if (!simulation) return;
-    const Model& model = simulation->model();
+ private:
+  void write_summary() const {
+    folder_.write_file("summary.json", [&](std::ostream& out) { out << summary_.dump(2) << "\n"; });
+  }
+
+  // What every outcome records: timings, memory, the plugins loaded, and the model, steps and monitors.
+  void record(double solve_time) {
+    summary_["plugins_loaded"] = catalog_.loaded_files();
+    summary_["setup_time_s"] = setup_time_;
+    summary_["solve_time_s"] = solve_time;
+    summary_["wall_time_s"] = seconds_since(wall_start_);
+    summary_["peak_rss_mb"] = peak_rss_mb();
+    if (!simulation_) return;
+    const Model& model = simulation_->model();
     const auto stats = model.ip_support_statistics();
-    summary["nodes"] = model.node_count();
-    summary["integration_points"] = model.integration_point_count();
-    summary["support_size"] = {{"min", stats.min}, {"mean", stats.mean}, {"max", stats.max}};
-    summary["min_reciprocal_condition"] = stats.min_reciprocal_condition;
-    summary["steps"] = simulation->step();
-    summary["simulated_time_s"] = simulation->time();
-    summary["stable_time_step_s"] = simulation->unscaled_stable_time_step();
-    summary["constraint_factorisations"] = simulation->constraints().factorisations();
-    summary["force_evaluations"] = simulation->force_evaluations();
-    summary["monitors"] = simulation->monitor_reports();
-    summary["ip_updates_per_s"] = solve_time > 0 ? static_cast<double>(simulation->force_evaluations()) *
-                                                       model.integration_point_count() / solve_time
-                                                 : 0.0;
-    const IntegratorReport report = simulation->integrator().report();
-    summary["integrator"] = to_json(report);
-    summary["time_step_s"] = report.time_step;
-  };
+    summary_["nodes"] = model.node_count();
+    summary_["integration_points"] = model.integration_point_count();
+    summary_["support_size"] = {{"min", stats.min}, {"mean", stats.mean}, {"max", stats.max}};
+    summary_["min_reciprocal_condition"] = stats.min_reciprocal_condition;
+    summary_["steps"] = simulation_->step();
+    summary_["simulated_time_s"] = simulation_->time();
+    summary_["stable_time_step_s"] = simulation_->unscaled_stable_time_step();
+    summary_["constraint_factorisations"] = simulation_->constraints().factorisations();
+    summary_["force_evaluations"] = simulation_->force_evaluations();
+    summary_["monitors"] = simulation_->monitor_reports();
+    summary_["ip_updates_per_s"] = solve_time > 0 ? static_cast<double>(simulation_->force_evaluations()) *
+                                                        model.integration_point_count() / solve_time
+                                                  : 0.0;
+    const IntegratorReport report = simulation_->integrator().report();
+    summary_["integrator"] = to_json(report);
+    summary_["time_step_s"] = report.time_step;
+  }
 
-  double setup_time = 0.0;
-  Clock::time_point solve_start;
-  try {
-    const auto setup_start = Clock::now();
-    simulation = std::make_unique<Simulation>(scene, catalog);
-    setup_time = seconds_since(setup_start);
-    log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time, simulation->unscaled_stable_time_step());
-    observer = std::make_unique<RunObserver>(folder, *simulation, scene.output, options.progress);
-    solve_start = Clock::now();
-    simulation->run(observer.get());
-    observer->finish(*simulation);
-  } catch (const InstabilityError& e) {
-    if (observer) observer->finish(*simulation);
-    fill_common(setup_time, seconds_since(solve_start));
+  // status "unstable" with the diagnostic and the last state whose forces were admissible (never named
+  // result.vtu); exit 3.
+  int unstable(const InstabilityError& e) {
+    if (observer_) observer_->finish(*simulation_);
+    record(seconds_since(solve_start_));
     const Diagnostic& d = e.diagnostic();
     json where = json::array();
     for (std::size_t i = 0; i < d.coordinates.size(); ++i) {
@@ -208,67 +231,81 @@ int run_scene(const RunOptions& options) {
       if (i < d.integration_points.size()) item["integration_point"] = d.integration_points[i];
       where.push_back(item);
     }
-    summary["status"] = "unstable";
-    summary["diagnostic"] = {{"step", d.step}, {"time_s", d.time}, {"what", d.what}, {"detail", d.detail}, {"where", where}};
-    // The last state whose forces were admissible; never named result.vtu.
-    const auto last = d.what == "inverted_material" ? simulation->previous_displacement() : simulation->displacement();
+    summary_["status"] = "unstable";
+    summary_["diagnostic"] = {{"step", d.step}, {"time_s", d.time}, {"what", d.what}, {"detail", d.detail}, {"where", where}};
+    const auto last = d.what == "inverted_material" ? simulation_->previous_displacement() : simulation_->displacement();
     std::vector<double> u(last.size());
-    simulation->model().interpolate(last, u);
-    folder.write_file("last_good_state.vtu", [&](std::ostream& out) { write_vtu(out, simulation->model().mesh(), u, {}); });
-    summary["last_good_state"] = "last_good_state.vtu";
+    simulation_->model().interpolate(last, u);
+    folder_.write_file("last_good_state.vtu", [&](std::ostream& out) { write_vtu(out, simulation_->model().mesh(), u, {}); });
+    summary_["last_good_state"] = "last_good_state.vtu";
     write_summary();
     log().error("{}", e.what());
-    log().error("wrote {} with status \"unstable\"", (folder.path() / "summary.json").string());
+    log().error("wrote {} with status \"unstable\"", (folder_.path() / "summary.json").string());
     return 3;
-  } catch (const Interrupted& e) {
-    fill_common(setup_time, seconds_since(solve_start));
-    summary["status"] = "interrupted";
+  }
+
+  int finish_without_result(const std::string& status, double solve_time, const std::string& error) {
+    record(solve_time);
+    summary_["status"] = status;
+    if (!error.empty()) summary_["error"] = error;
     write_summary();
-    log().error("interrupted at step {}; {} says so", simulation ? simulation->step() : 0,
-                (folder.path() / "summary.json").string());
+    if (status == "interrupted")
+      log().error("interrupted at step {}; {} says so", simulation_ ? simulation_->step() : 0,
+                  (folder_.path() / "summary.json").string());
     return 1;
-  } catch (const InputError& e) {
-    fill_common(setup_time, 0.0);
-    const InputError located = locate_problems(e, scene.document);
-    summary["status"] = "invalid_input";
-    summary["error"] = located.what();
-    write_summary();
-    throw located;
-  } catch (const std::exception& e) {
-    fill_common(setup_time, 0.0);
-    summary["status"] = "failed";
-    summary["error"] = e.what();
-    write_summary();
-    throw;
   }
-  const double solve_time = seconds_since(solve_start);
 
-  const auto u = simulation->interpolated_displacement();
-  double max_displacement = 0.0;
-  for (std::size_t i = 0; i < u.size(); i += 3)
-    max_displacement = std::max(max_displacement, std::sqrt(u[i] * u[i] + u[i + 1] * u[i + 1] + u[i + 2] * u[i + 2]));
-  const auto fields = cell_fields(simulation->model(), simulation->displacement(), scene.output.string_list("cell_data"));
-  folder.write_file("result.vtu", [&](std::ostream& out) { write_vtu(out, simulation->model().mesh(), u, fields); });
-
-  fill_common(setup_time, solve_time);
-  summary["max_displacement_m"] = max_displacement;
-  if (const auto* needle = simulation->needle()) {
-    const NeedleStatus s = needle->status();
-    summary["needle"] = {{"final_depth_m", s.depth},
-                         {"final_force_N", s.force},
-                         {"puncture_depth_m", s.puncture_depth >= 0 ? json(s.puncture_depth) : json(nullptr)},
-                         {"phase", to_string(s.phase)},
-                         {"driven_nodes", s.driven_nodes}};
+  // result.vtu, then summary.json with status "ok": the needle, the reactions and the error indicators.
+  int succeeded(double solve_time) {
+    const auto u = simulation_->interpolated_displacement();
+    double max_displacement = 0.0;
+    for (std::size_t i = 0; i < u.size(); i += 3)
+      max_displacement = std::max(max_displacement, std::sqrt(u[i] * u[i] + u[i + 1] * u[i + 1] + u[i + 2] * u[i + 2]));
+    const auto fields = cell_fields(simulation_->model(), simulation_->displacement(), scene_.output.string_list("cell_data"));
+    folder_.write_file("result.vtu", [&](std::ostream& out) { write_vtu(out, simulation_->model().mesh(), u, fields); });
+    record(solve_time);
+    summary_["max_displacement_m"] = max_displacement;
+    if (const auto* needle = simulation_->needle()) {
+      const NeedleStatus s = needle->status();
+      summary_["needle"] = {{"final_depth_m", s.depth},
+                            {"final_force_N", s.force},
+                            {"puncture_depth_m", s.puncture_depth >= 0 ? json(s.puncture_depth) : json(nullptr)},
+                            {"phase", to_string(s.phase)},
+                            {"driven_nodes", s.driven_nodes}};
+    }
+    json reactions = json::object();
+    for (const auto* set : simulation_->constraint_sets()) reactions[set->name] = vec_json(set->total_reaction());
+    summary_["final_reactions_N"] = reactions;
+    summary_["error_indicators"] = error_indicators(*simulation_);
+    summary_["status"] = "ok";
+    write_summary();
+    log().info("done: {} steps, solve {:.2f} s, {:.3g} integration-point updates/s; results in {}", simulation_->step(),
+               solve_time, summary_["ip_updates_per_s"].get<double>(), folder_.path().string());
+    return 0;
   }
-  json reactions = json::object();
-  for (const auto* set : simulation->constraint_sets()) reactions[set->name] = vec_json(set->total_reaction());
-  summary["final_reactions_N"] = reactions;
-  summary["error_indicators"] = error_indicators(*simulation);
-  summary["status"] = "ok";
-  write_summary();
-  log().info("done: {} steps, solve {:.2f} s, {:.3g} integration-point updates/s; results in {}", simulation->step(),
-             solve_time, summary["ip_updates_per_s"].get<double>(), folder.path().string());
-  return 0;
+
+  const Clock::time_point wall_start_;  // before the scene was read
+  const Scene& scene_;
+  PluginCatalog& catalog_;
+  const OutputFolder folder_;
+  json summary_;
+  Clock::time_point solve_start_ = Clock::now();
+  double setup_time_ = 0.0;
+  std::unique_ptr<Simulation> simulation_;
+  std::unique_ptr<RunObserver> observer_;
+};
+
+}  // namespace
+
+int run_scene(const RunOptions& options) {
+  const auto wall_start = Clock::now();
+  SceneDocument document = read_scene(options.scene.scene, options.scene.overrides);
+  PluginCatalog catalog(plugin_search_path(options.scene.plugin_paths, scene_plugin_paths(document)));
+  const Scene scene = validate_scene(std::move(document), catalog);
+  SceneRun run(options, scene, catalog, wall_start);
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
+  return run.run(options.progress);
 }
 
 }  // namespace mtled::app
