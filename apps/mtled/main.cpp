@@ -10,83 +10,107 @@
 #include "mtled/simd.hpp"
 #include "mtled/version.hpp"
 
+namespace {
+
+struct Commands {
+  std::string log_level = "info";
+  std::vector<std::filesystem::path> plugin_paths;
+  std::string simd = "best";
+  mtled::app::RunOptions run;
+  mtled::app::SceneOptions validate;
+  bool as_json = false, as_markdown = false;
+  std::string describe;
+  mtled::app::CompareOptions compare;
+  mtled::app::StudyOptions study;
+  CLI::App *run_cmd = nullptr, *validate_cmd = nullptr, *plugins_cmd = nullptr, *schema_cmd = nullptr,
+           *compare_cmd = nullptr, *study_cmd = nullptr;
+};
+
+void add_global_options(CLI::App& cli, Commands& c) {
+  cli.add_option("--log-level", c.log_level, "trace, debug, info, warn, error or off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
+  cli.add_option("--plugin-path", c.plugin_paths, "extra plugin folder, searched first (repeatable)");
+  cli.add_option("--simd", c.simd,
+                 "instruction set of the vectorised kernels: best (the default: the best this CPU has), or one of "
+                 "avx512, avx2, sse4, baseline (the portable one) to compare; answers agree to round-off");
+}
+
+void add_scene_commands(CLI::App& cli, Commands& c) {
+  c.run_cmd = cli.add_subcommand("run", "run a scene");
+  c.run_cmd->add_option("scene", c.run.scene.scene, "scene file (JSON)")->required();
+  c.run_cmd->add_option("-o,--output", c.run.output, "output folder (default: out/<scene name>)");
+  c.run_cmd->add_option("--set", c.run.scene.overrides, "override a scene value: /json/pointer=value (repeatable)");
+  c.run_cmd->add_option("--threads", c.run.threads, "threads for the force loop (default: OMP_NUM_THREADS when set, else all cores)")
+      ->check(CLI::NonNegativeNumber);
+  c.run_cmd->add_flag("!--no-progress", c.run.progress, "no progress display (it only shows on a terminal anyway)");
+
+  c.validate_cmd = cli.add_subcommand("validate", "check a scene against every named component's parameters");
+  c.validate_cmd->add_option("scene", c.validate.scene, "scene file (JSON)")->required();
+  c.validate_cmd->add_option("--set", c.validate.overrides, "override a scene value: /json/pointer=value");
+
+  c.plugins_cmd = cli.add_subcommand("plugins", "list the components mtled can load");
+  c.plugins_cmd->add_flag("--json", c.as_json, "machine-readable list");
+  c.plugins_cmd->add_flag("--markdown", c.as_markdown, "the parameter reference (docs/parameters.md)");
+  c.plugins_cmd->add_option("--describe", c.describe, "one component's parameters (NAME or CATEGORY/NAME)");
+
+  c.schema_cmd = cli.add_subcommand("schema", "print the JSON Schema of scenes (for editors)");
+}
+
+void add_analysis_commands(CLI::App& cli, Commands& c) {
+  c.compare_cmd = cli.add_subcommand(
+      "compare", "NRMSE per displacement component between two runs (A interpolated onto B's nodes when they differ)");
+  c.compare_cmd->add_option("run_a", c.compare.a, "run folder (or result .vtu) A")->required();
+  c.compare_cmd->add_option("run_b", c.compare.b, "run folder (or result .vtu) B: the reference, whose nodes are used")
+      ->required();
+  c.compare_cmd->add_flag("--json", c.compare.json, "machine-readable output");
+  c.compare_cmd->add_option("--histogram", c.compare.histogram, "write histograms of u_A - u_B per component (SVG)");
+  c.compare_cmd->add_option("--bins", c.compare.bins, "histogram bins (default 41)")->check(CLI::PositiveNumber);
+
+  c.study_cmd = cli.add_subcommand("study", "run a sweep of scene settings against a reference (docs/studies.md)");
+  c.study_cmd->add_option("study", c.study.study, "study file (JSON)")->required();
+  c.study_cmd->add_option("-o,--output", c.study.output, "the study's folder (study.csv, study.json, error_vs_time.svg, runs/)")
+      ->required();
+  c.study_cmd->add_option("--threads", c.study.threads, "threads for every run (default: the study's \"threads\", else all)")
+      ->check(CLI::NonNegativeNumber);
+  c.study_cmd->add_flag("--reuse", c.study.reuse,
+                        "keep runs whose folder already holds a successful result of the same scene and settings");
+}
+
+int dispatch(Commands& c) {
+  using namespace mtled;
+  simd::use(c.simd);
+  if (*c.run_cmd) return app::run_scene(c.run);
+  if (*c.validate_cmd) return app::validate_scene_command(c.validate);
+  if (*c.plugins_cmd) return app::list_plugins(c.plugin_paths, c.as_json, c.as_markdown, c.describe);
+  if (*c.schema_cmd) return app::print_schema(c.plugin_paths);
+  if (*c.compare_cmd) return app::compare_command(c.compare, c.plugin_paths);
+  if (*c.study_cmd) return app::study_command(c.study);
+  return 1;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace mtled;
   CLI::App cli{"mtled: meshless total Lagrangian explicit dynamics for needle insertion into soft tissue"};
   cli.set_version_flag("--version", MTLED_VERSION_STRING);
   cli.require_subcommand(1);
   cli.fallthrough();  // global options may follow the subcommand: mtled run scene.json --log-level debug
-  std::string log_level = "info";
-  cli.add_option("--log-level", log_level, "trace, debug, info, warn, error or off")
-      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "off"}));
-  std::vector<std::filesystem::path> plugin_paths;
-  cli.add_option("--plugin-path", plugin_paths, "extra plugin folder, searched first (repeatable)");
-  std::string simd = "best";
-  cli.add_option("--simd", simd,
-                 "instruction set of the vectorised kernels: best (the default: the best this CPU has), or one of "
-                 "avx512, avx2, sse4, baseline (the portable one) to compare; answers agree to round-off");
-
-  app::RunOptions run;
-  auto* run_cmd = cli.add_subcommand("run", "run a scene");
-  run_cmd->add_option("scene", run.scene.scene, "scene file (JSON)")->required();
-  run_cmd->add_option("-o,--output", run.output, "output folder (default: out/<scene name>)");
-  run_cmd->add_option("--set", run.scene.overrides, "override a scene value: /json/pointer=value (repeatable)");
-  run_cmd->add_option("--threads", run.threads, "threads for the force loop (default: OMP_NUM_THREADS when set, else all cores)")
-      ->check(CLI::NonNegativeNumber);
-  run_cmd->add_flag("!--no-progress", run.progress, "no progress display (it only shows on a terminal anyway)");
-
-  app::SceneOptions validate;
-  auto* validate_cmd = cli.add_subcommand("validate", "check a scene against every named component's parameters");
-  validate_cmd->add_option("scene", validate.scene, "scene file (JSON)")->required();
-  validate_cmd->add_option("--set", validate.overrides, "override a scene value: /json/pointer=value");
-
-  bool as_json = false, as_markdown = false;
-  std::string describe;
-  auto* plugins_cmd = cli.add_subcommand("plugins", "list the components mtled can load");
-  plugins_cmd->add_flag("--json", as_json, "machine-readable list");
-  plugins_cmd->add_flag("--markdown", as_markdown, "the parameter reference (docs/parameters.md)");
-  plugins_cmd->add_option("--describe", describe, "one component's parameters (NAME or CATEGORY/NAME)");
-
-  auto* schema_cmd = cli.add_subcommand("schema", "print the JSON Schema of scenes (for editors)");
-
-  app::CompareOptions compare;
-  auto* compare_cmd = cli.add_subcommand(
-      "compare", "NRMSE per displacement component between two runs (A interpolated onto B's nodes when they differ)");
-  compare_cmd->add_option("run_a", compare.a, "run folder (or result .vtu) A")->required();
-  compare_cmd->add_option("run_b", compare.b, "run folder (or result .vtu) B: the reference, whose nodes are used")
-      ->required();
-  compare_cmd->add_flag("--json", compare.json, "machine-readable output");
-  compare_cmd->add_option("--histogram", compare.histogram, "write histograms of u_A - u_B per component (SVG)");
-  compare_cmd->add_option("--bins", compare.bins, "histogram bins (default 41)")->check(CLI::PositiveNumber);
-
-  app::StudyOptions study;
-  auto* study_cmd = cli.add_subcommand("study", "run a sweep of scene settings against a reference (docs/studies.md)");
-  study_cmd->add_option("study", study.study, "study file (JSON)")->required();
-  study_cmd->add_option("-o,--output", study.output, "the study's folder (study.csv, study.json, error_vs_time.svg, runs/)")
-      ->required();
-  study_cmd->add_option("--threads", study.threads, "threads for every run (default: the study's \"threads\", else all)")
-      ->check(CLI::NonNegativeNumber);
-  study_cmd->add_flag("--reuse", study.reuse,
-                      "keep runs whose folder already holds a successful result of the same scene and settings");
-
+  Commands c;
+  add_global_options(cli, c);
+  add_scene_commands(cli, c);
+  add_analysis_commands(cli, c);
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = cli.exit(e);
     return code == 0 ? 0 : 2;
   }
-  set_log_level(log_level);
-  run.scene.plugin_paths = validate.plugin_paths = study.plugin_paths = plugin_paths;
-  study.log_level = log_level;
-
+  set_log_level(c.log_level);
+  c.run.scene.plugin_paths = c.validate.plugin_paths = c.study.plugin_paths = c.plugin_paths;
+  c.study.log_level = c.log_level;
   try {
-    simd::use(simd);
-    if (*run_cmd) return app::run_scene(run);
-    if (*validate_cmd) return app::validate_scene_command(validate);
-    if (*plugins_cmd) return app::list_plugins(plugin_paths, as_json, as_markdown, describe);
-    if (*schema_cmd) return app::print_schema(plugin_paths);
-    if (*compare_cmd) return app::compare_command(compare, plugin_paths);
-    if (*study_cmd) return app::study_command(study);
+    return dispatch(c);
   } catch (const InputError& e) {
     for (const auto& problem : e.problems()) log().error("{}", problem.format());
     return 2;
@@ -97,5 +121,4 @@ int main(int argc, char** argv) {
     log().error("{}", e.what());
     return 1;
   }
-  return 1;
 }

@@ -42,8 +42,9 @@ void guarded(const Parameters& parameters, const std::string& what, Call call) {
 
 }  // namespace
 
-Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
-  // Mesh
+namespace {
+
+TetMesh load_mesh(const Scene& scene, PluginCatalog& catalog) {
   auto source = build<MeshSource>(catalog, scene.mesh);
   MeshContext context{scene.document.directory(), 1};
   TetMesh mesh;
@@ -51,8 +52,12 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   if (mesh.source.empty()) mesh.source = scene.mesh.type;
   remove_unused_nodes(mesh);
   check_mesh(mesh);
+  return mesh;
+}
 
-  // Materials by region
+// One material per mesh region: a block with "region" fills that region, one without fills every other.
+std::vector<std::shared_ptr<const Material>> region_materials(const Scene& scene, PluginCatalog& catalog,
+                                                              const TetMesh& mesh) {
   std::vector<std::shared_ptr<const Material>> region_material(mesh.region_names.size());
   std::shared_ptr<const Material> fallback;
   for (const auto& block : scene.materials) {
@@ -85,18 +90,46 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
     region_material[r] = fallback;
   }
 
-  // Discretisation
+  return region_material;
+}
+
+}  // namespace
+
+Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
+  TetMesh mesh = load_mesh(scene, catalog);
+  auto materials = region_materials(scene, catalog, mesh);
+  build_model(scene, catalog, std::move(mesh), std::move(materials));
+  build_drivers(scene, catalog);
+  // The state: at rest, the constraints applied.
+  const std::size_t dofs = 3 * static_cast<std::size_t>(model_->node_count());
+  u_.assign(dofs, 0.0);
+  u_previous_.assign(dofs, 0.0);
+  u_before_.assign(dofs, 0.0);
+  mass_ = model_->lumped_mass();
+  const auto& dt = model_->ip_critical_time_steps();
+  unscaled_stable_time_step_ = stable_time_step_ = *std::min_element(dt.begin(), dt.end());
+  update_drivers();
+  constraint_system_->enforce(u_, 1.0);
+
+  integrator_ = build<TimeIntegrator>(catalog, scene.integrator);
+  build_monitors(scene);
+}
+
+void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
+                             std::vector<std::shared_ptr<const Material>> materials) {
   auto shape_functions = build<ShapeFunctions>(catalog, scene.shape_function);
   Model::Options options;
   options.integration_points_per_tet = static_cast<int>(scene.discretisation.integer("integration_points_per_tet"));
   options.consistent_integration = scene.discretisation.boolean("consistent_integration");
   options.nodal_volumetric_averaging = scene.discretisation.string("volumetric") == "nodal_average";
-  model_ = std::make_unique<Model>(std::move(mesh), shape_functions, std::move(region_material), options);
+  model_ = std::make_unique<Model>(std::move(mesh), shape_functions, std::move(materials), options);
   const SupportStatistics stats = model_->ip_support_statistics();
   log().info("model: {} nodes, {} integration points, support size min/mean/max {}/{:.1f}/{}", model_->node_count(),
              model_->integration_point_count(), stats.min, stats.mean, stats.max);
 
-  // Drivers
+}
+
+void Simulation::build_drivers(const Scene& scene, PluginCatalog& catalog) {
   for (const auto& block : scene.boundaries) {
     auto boundary = build<BoundaryCondition>(catalog, block);
     guarded(block.parameters, "setting up the boundary condition", [&] { boundary->setup(*model_); });
@@ -120,19 +153,9 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
                                                     constraint_sets_[a]->name));
   constraint_system_ = std::make_unique<ConstraintSystem>(*model_);
 
-  // State
-  const std::size_t dofs = 3 * static_cast<std::size_t>(model_->node_count());
-  u_.assign(dofs, 0.0);
-  u_previous_.assign(dofs, 0.0);
-  u_before_.assign(dofs, 0.0);
-  mass_ = model_->lumped_mass();
-  const auto& dt = model_->ip_critical_time_steps();
-  unscaled_stable_time_step_ = stable_time_step_ = *std::min_element(dt.begin(), dt.end());
-  update_drivers();
-  constraint_system_->enforce(u_, 1.0);
+}
 
-  integrator_ = build<TimeIntegrator>(catalog, scene.integrator);
-
+void Simulation::build_monitors(const Scene& scene) {
   auto energy = std::make_unique<EnergyMonitor>();
   energy_ = energy.get();
   monitors_.push_back(std::move(energy));

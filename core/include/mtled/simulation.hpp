@@ -70,6 +70,10 @@ class Simulation final : public DiscreteSystem {
   json monitor_reports() const;
 
  private:
+  void build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
+                   std::vector<std::shared_ptr<const Material>> materials);
+  void build_drivers(const Scene& scene, PluginCatalog& catalog);
+  void build_monitors(const Scene& scene);
   void update_drivers();
   // Stops the run (InstabilityError "non_finite") when the integrator's update is not finite.
   void check_finite(std::span<const double> u_new, double new_time) const;

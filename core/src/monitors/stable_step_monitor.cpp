@@ -8,12 +8,10 @@
 
 namespace mtled {
 
-void StableStepMonitor::check(const StepRecord& step) {
-  setup_estimate_ = step.stable_time_step;
+double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
   const Model& model = *step.model;
   const ConstraintSystem& constraints = *step.constraints;
   const auto mass = step.mass;
-  const double step_size = step.step_size;
   // The largest eigenvalue of K v = lambda M v at the current state by Lanczos iteration on
   // A = M^-1/2 K M^-1/2 (full reorthogonalisation; a few dozen vectors), with A q from a forward difference of
   // the internal forces. Were K symmetric, the Ritz values would approach lambda_max from below and the estimate
@@ -38,7 +36,7 @@ void StableStepMonitor::check(const StepRecord& step) {
   }
   std::vector<double> f0(dofs), f1(dofs), perturbed(dofs), root_mass(dofs);
   for (std::size_t d = 0; d < dofs; ++d) root_mass[d] = std::sqrt(mass[d / 3]);
-  if (model.internal_forces(step.u, f0) >= 0) return;  // an inadmissible state is the other monitors' business
+  if (model.internal_forces(step.u, f0) >= 0) return 0.0;  // an inadmissible state is the other monitors' business
   ++force_evaluations_;
 
   // A random start needs more vectors than a warm one to resolve the top of the spectrum.
@@ -49,7 +47,7 @@ void StableStepMonitor::check(const StepRecord& step) {
   std::vector<double> increment(mode_);  // a displacement increment, projected into the constrained subspace
   constraints.project_out(increment);
   for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
-  if (!(w.norm() > 0.0)) return;
+  if (!(w.norm() > 0.0)) return 0.0;
   q.col(0) = w / w.norm();
   int built = 0;
   for (int j = 0; j < size; ++j) {
@@ -60,7 +58,7 @@ void StableStepMonitor::check(const StepRecord& step) {
     for (std::size_t d = 0; d < dofs; ++d)
       perturbed[d] = step.u[d] + epsilon * q(static_cast<Eigen::Index>(d), j) / root_mass[d];
     ++force_evaluations_;
-    if (model.internal_forces(perturbed, f1) >= 0) return;
+    if (model.internal_forces(perturbed, f1) >= 0) return 0.0;
     // M^-1 K x, projected, then back to the symmetric form: w = M^1/2 P M^-1 K x.
     for (std::size_t d = 0; d < dofs; ++d) increment[d] = (f1[d] - f0[d]) / (epsilon * mass[d / 3]);
     constraints.project_out(increment);
@@ -80,10 +78,16 @@ void StableStepMonitor::check(const StepRecord& step) {
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> ritz(t);
   const double lambda = ritz.eigenvalues()[built - 1];
-  if (!(lambda > 0.0) || !std::isfinite(lambda)) return;
+  if (!(lambda > 0.0) || !std::isfinite(lambda)) return 0.0;
   const Eigen::VectorXd vector = q.leftCols(built) * ritz.eigenvectors().col(built - 1);
   for (std::size_t d = 0; d < dofs; ++d) mode_[d] = vector[static_cast<Eigen::Index>(d)] / root_mass[d];
+  return lambda;
+}
 
+void StableStepMonitor::check(const StepRecord& step) {
+  setup_estimate_ = step.stable_time_step;
+  const double lambda = largest_eigenvalue(step);
+  if (!(lambda > 0.0)) return;
   ++checks_;
   last_stable_step_ = 2.0 / std::sqrt(lambda);
   if (last_stable_step_ < smallest_stable_step_) {
@@ -91,13 +95,19 @@ void StableStepMonitor::check(const StepRecord& step) {
     smallest_stable_step_at_ = step.step;
   }
   log().debug("step {}: stable step re-estimated {:.4g} s (time step {:.4g} s)", step.step, last_stable_step_,
-              step_size);
+              step.step_size);
   constexpr double kMargin = 1.05;
-  if (!(step_size > kMargin * last_stable_step_)) return;
+  if (!(step.step_size > kMargin * last_stable_step_)) return;
+  refuse(step);
+}
+
+void StableStepMonitor::refuse(const StepRecord& step) const {
+  const Model& model = *step.model;
+  const double step_size = step.step_size;
   // Where the fastest mode lives: the node with the largest share of it.
   Index where = 0;
   double share = 0.0;
-  for (std::size_t d = 0; d < dofs; ++d)
+  for (std::size_t d = 0; d < mode_.size(); ++d)
     if (std::abs(mode_[d]) > share) {
       share = std::abs(mode_[d]);
       where = static_cast<Index>(d / 3);

@@ -22,6 +22,10 @@ class StableStepMonitor final : public StepMonitor {
 
  private:
   void check(const StepRecord& step);
+  // lambda_max of M^-1 K at the step's state (0 when it cannot be estimated); keeps its mode for the next check.
+  double largest_eigenvalue(const StepRecord& step);
+  // Throws the InstabilityError "time_step_above_stable", naming where the fastest mode is largest.
+  [[noreturn]] void refuse(const StepRecord& step) const;
 
   long every_;
   int iterations_;
