@@ -260,7 +260,7 @@ StepRecord Simulation::last_step() const {
   r.previous_values = &previous_values_;
   r.external_forces = !force_sets_.empty();
   r.stable_time_step = stable_time_step_;
-  r.time_step_factor = integrator_->report().time_step_factor;
+  r.time_step_factor = time_step_factor_;
   return r;
 }
 
@@ -274,6 +274,7 @@ json Simulation::monitor_reports() const {
 
 void Simulation::run(StepObserver* observer) {
   integrator_->initialise(*this);
+  time_step_factor_ = integrator_->report().time_step_factor;
   if (observer != nullptr) observer->on_step(*this);
   while (!integrator_->finished(*this)) {
     integrator_->step(*this);

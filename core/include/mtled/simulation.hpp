@@ -98,6 +98,7 @@ class Simulation final : public DiscreteSystem {
   std::vector<double> u_before_;                    // the displacements a step before u_previous_
   std::vector<double> u_free_;  // this step's displacements before the constraint projection
   double step_size_ = 0.0, previous_step_size_ = 0.0;
+  double time_step_factor_ = 1.0;  // the integrator's, read once it is initialised
   std::vector<std::unique_ptr<StepMonitor>> monitors_;
   const class EnergyMonitor* energy_ = nullptr;  // among monitors_: always on
 };
