@@ -71,6 +71,71 @@ bool only_keys(const json& object, const std::vector<std::string>& allowed, cons
 }
 }  // namespace
 
+namespace {
+// The selector's one shape ("group", "plane", "box", "cylinder" or "sphere") into s.
+void read_shape(const json& value, const std::string& pointer, NodeSelector& s, std::vector<Problem>& problems) {
+  if (value.contains("group")) {
+    s.kind = NodeSelector::Kind::group;
+    if (!value["group"].is_string() || value["group"].get<std::string>().empty()) {
+      problems.push_back({pointer + "/group", "expected the name of a node set or physical group of the mesh"});
+    } else {
+      s.group = value["group"].get<std::string>();
+    }
+  } else if (value.contains("plane")) {
+    s.kind = NodeSelector::Kind::plane;
+    const std::string p = pointer + "/plane";
+    const json& o = value["plane"];
+    if (!o.is_object()) {
+      problems.push_back({p, "expected {\"point\": [x, y, z], \"normal\": [x, y, z]}"});
+    } else {
+      only_keys(o, {"point", "normal"}, p, problems);
+      if (auto x = read_vec3(o, "point", p, problems)) s.point = *x;
+      if (auto n = read_vec3(o, "normal", p, problems, true)) s.direction = n->normalized();
+    }
+  } else if (value.contains("box")) {
+    s.kind = NodeSelector::Kind::box;
+    const std::string p = pointer + "/box";
+    const json& o = value["box"];
+    if (!o.is_object()) {
+      problems.push_back({p, "expected {\"min\": [x, y, z], \"max\": [x, y, z]}"});
+    } else {
+      only_keys(o, {"min", "max"}, p, problems);
+      const auto lo = read_vec3(o, "min", p, problems);
+      const auto hi = read_vec3(o, "max", p, problems);
+      if (lo && hi) {
+        s.min = *lo;
+        s.max = *hi;
+        if ((s.max.array() < s.min.array()).any())
+          problems.push_back({p, "\"min\" must not exceed \"max\" in any coordinate"});
+      }
+    }
+  } else if (value.contains("cylinder")) {
+    s.kind = NodeSelector::Kind::cylinder;
+    const std::string p = pointer + "/cylinder";
+    const json& o = value["cylinder"];
+    if (!o.is_object()) {
+      problems.push_back({p, "expected {\"point\": [..], \"direction\": [..], \"radius\": r}"});
+    } else {
+      only_keys(o, {"point", "direction", "radius"}, p, problems);
+      if (auto x = read_vec3(o, "point", p, problems)) s.point = *x;
+      if (auto d = read_vec3(o, "direction", p, problems, true)) s.direction = d->normalized();
+      if (auto r = read_positive(o, "radius", p, problems)) s.radius = *r;
+    }
+  } else {
+    s.kind = NodeSelector::Kind::sphere;
+    const std::string p = pointer + "/sphere";
+    const json& o = value["sphere"];
+    if (!o.is_object()) {
+      problems.push_back({p, "expected {\"center\": [x, y, z], \"radius\": r}"});
+    } else {
+      only_keys(o, {"center", "radius"}, p, problems);
+      if (auto x = read_vec3(o, "center", p, problems)) s.point = *x;
+      if (auto r = read_positive(o, "radius", p, problems)) s.radius = *r;
+    }
+  }
+}
+}  // namespace
+
 std::optional<NodeSelector> NodeSelector::parse(const json& value, const std::string& pointer,
                                                 std::vector<Problem>& problems) {
   const std::size_t before = problems.size();
@@ -106,65 +171,7 @@ std::optional<NodeSelector> NodeSelector::parse(const json& value, const std::st
       s.surface_only = value["surface_only"].get<bool>();
     }
   }
-  if (value.contains("group")) {
-    s.kind = Kind::group;
-    if (!value["group"].is_string() || value["group"].get<std::string>().empty()) {
-      problems.push_back({pointer + "/group", "expected the name of a node set or physical group of the mesh"});
-    } else {
-      s.group = value["group"].get<std::string>();
-    }
-  } else if (value.contains("plane")) {
-    s.kind = Kind::plane;
-    const std::string p = pointer + "/plane";
-    const json& o = value["plane"];
-    if (!o.is_object()) {
-      problems.push_back({p, "expected {\"point\": [x, y, z], \"normal\": [x, y, z]}"});
-    } else {
-      only_keys(o, {"point", "normal"}, p, problems);
-      if (auto x = read_vec3(o, "point", p, problems)) s.point = *x;
-      if (auto n = read_vec3(o, "normal", p, problems, true)) s.direction = n->normalized();
-    }
-  } else if (value.contains("box")) {
-    s.kind = Kind::box;
-    const std::string p = pointer + "/box";
-    const json& o = value["box"];
-    if (!o.is_object()) {
-      problems.push_back({p, "expected {\"min\": [x, y, z], \"max\": [x, y, z]}"});
-    } else {
-      only_keys(o, {"min", "max"}, p, problems);
-      const auto lo = read_vec3(o, "min", p, problems);
-      const auto hi = read_vec3(o, "max", p, problems);
-      if (lo && hi) {
-        s.min = *lo;
-        s.max = *hi;
-        if ((s.max.array() < s.min.array()).any())
-          problems.push_back({p, "\"min\" must not exceed \"max\" in any coordinate"});
-      }
-    }
-  } else if (value.contains("cylinder")) {
-    s.kind = Kind::cylinder;
-    const std::string p = pointer + "/cylinder";
-    const json& o = value["cylinder"];
-    if (!o.is_object()) {
-      problems.push_back({p, "expected {\"point\": [..], \"direction\": [..], \"radius\": r}"});
-    } else {
-      only_keys(o, {"point", "direction", "radius"}, p, problems);
-      if (auto x = read_vec3(o, "point", p, problems)) s.point = *x;
-      if (auto d = read_vec3(o, "direction", p, problems, true)) s.direction = d->normalized();
-      if (auto r = read_positive(o, "radius", p, problems)) s.radius = *r;
-    }
-  } else {
-    s.kind = Kind::sphere;
-    const std::string p = pointer + "/sphere";
-    const json& o = value["sphere"];
-    if (!o.is_object()) {
-      problems.push_back({p, "expected {\"center\": [x, y, z], \"radius\": r}"});
-    } else {
-      only_keys(o, {"center", "radius"}, p, problems);
-      if (auto x = read_vec3(o, "center", p, problems)) s.point = *x;
-      if (auto r = read_positive(o, "radius", p, problems)) s.radius = *r;
-    }
-  }
+  read_shape(value, pointer, s, problems);
   if (problems.size() != before) return std::nullopt;
   return s;
 }
