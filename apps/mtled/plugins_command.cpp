@@ -67,6 +67,24 @@ void describe_markdown(std::ostream& out, const ComponentDeclaration& d, const s
 
 }  // namespace
 
+// Where a component goes in a scene, with its declaration's example parameters: the block to paste.
+std::string example_scene_block(const ComponentDeclaration& d) {
+  nlohmann::ordered_json block = {{"type", d.name()}};
+  if (d.example().is_object())
+    for (const auto& [key, value] : d.example().items()) block[key] = value;
+  const std::string text = block.dump();
+  switch (d.category()) {
+    case Category::mesh: return fmt::format("\"mesh\": {}", text);
+    case Category::shape_function: return fmt::format("\"shape_function\": {}", text);
+    case Category::material: return fmt::format("\"materials\": [{}]", text);
+    case Category::boundary: return fmt::format("\"boundaries\": [{}]", text);
+    case Category::needle: return fmt::format("\"needle\": {}", text);
+    case Category::integrator: return fmt::format("\"integrator\": {}", text);
+    case Category::scene: break;
+  }
+  return text;
+}
+
 int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as_json, bool as_markdown,
                  const std::string& describe) {
   PluginCatalog catalog(plugin_search_path(plugin_paths, {}));
@@ -95,6 +113,7 @@ int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as
       std::cout << j.dump(2) << "\n";
     } else {
       describe_markdown(std::cout, declaration, fmt::format("{} {}", to_string(declaration.category()), "component"));
+      std::cout << "example, in a scene:\n\n    " << example_scene_block(declaration) << "\n\n";
       std::cout << "library: " << matches.front()->file.string() << "\n";
     }
     return 0;

@@ -74,6 +74,14 @@ TEST(Cli, ValidatePlugins_AndSchemaWork) {
   result = test::run_mtled({"plugins", "--describe", "ogden"});
   EXPECT_EQ(result.exit_code, 0) << result.output;
   expect_contains(result.output, "`alpha`");
+  // The example block, pasted into a scene, is the component with its declaration's example parameters.
+  const auto at = result.output.find("example, in a scene:");
+  ASSERT_NE(at, std::string::npos) << result.output;
+  const auto start = result.output.find('"', at + 20), end = result.output.find('\n', start);
+  const json block = json::parse("{" + result.output.substr(start, end - start) + "}");
+  ASSERT_TRUE(block.contains("materials")) << block.dump();
+  EXPECT_EQ(block["materials"][0]["type"], "ogden");
+  EXPECT_EQ(block["materials"][0]["mu"], 722.0);
   result = test::run_mtled({"schema"});
   EXPECT_EQ(result.exit_code, 0);
   const json schema = json::parse(result.output);
