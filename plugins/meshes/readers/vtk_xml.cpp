@@ -3,6 +3,8 @@
 // are understood; the scan stops at <AppendedData>, whose raw bytes may contain anything.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -222,6 +224,29 @@ std::optional<ScalarType> scalar_type(std::string_view name) {
   return std::nullopt;
 }
 
+// A DataArray's text without the elements VTK nests in it before the values (<InformationKey> with its <Value>s:
+// a range or a component name), blanked out so that line numbers stay true.
+std::string without_child_elements(std::string_view content) {
+  std::string out(content);
+  std::size_t at = 0;
+  while ((at = out.find('<', at)) != std::string::npos) {
+    std::size_t name_end = at + 1;
+    while (name_end < out.size() && (std::isalnum(static_cast<unsigned char>(out[name_end])) || out[name_end] == '_'))
+      ++name_end;
+    const std::string name = out.substr(at + 1, name_end - at - 1);
+    const std::size_t tag_end = out.find('>', at);
+    std::size_t end = tag_end == std::string::npos ? out.size() : tag_end + 1;
+    if (!name.empty() && tag_end != std::string::npos && out[tag_end - 1] != '/') {
+      const std::size_t close = out.find("</" + name, tag_end);
+      if (close != std::string::npos) end = std::min(out.size(), out.find('>', close) + 1);
+    }
+    for (std::size_t i = at; i < end; ++i)
+      if (out[i] != '\n') out[i] = ' ';
+    at = end;
+  }
+  return out;
+}
+
 struct ArraySpec {
   std::string name;
   std::string_view type = "Float32";
@@ -438,7 +463,8 @@ class VtuParser {
     std::vector<double> values;
     const ScalarType type = *scalar_type(array.type);
     if (array.format == "ascii") {
-      TextCursor cursor(array.content, scanner_.label(), scanner_.line_at(array.content_begin));
+      const std::string content = without_child_elements(array.content);
+      TextCursor cursor(content, scanner_.label(), scanner_.line_at(array.content_begin));
       const std::string what = fmt::format("a value of DataArray \"{}\"", array.name);
       while (const auto token = cursor.next_token()) values.push_back(mesh_readers::to_real(*token, cursor, what));
       return values;
@@ -451,7 +477,8 @@ class VtuParser {
                                    compressor_));
     std::vector<unsigned char> bytes;
     if (array.format == "binary") {
-      Base64Reader reader(array.content, 0);
+      const std::string content = without_child_elements(array.content);
+      Base64Reader reader(content, 0);
       read_block(
           array, [&](std::size_t n) { return reader.read(n, bytes); }, bytes);
     } else {

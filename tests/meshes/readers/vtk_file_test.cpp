@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -36,6 +37,30 @@ INSTANTIATE_TEST_SUITE_P(AllEncodings, VtkFixtures,
                              if (c == '.') c = '_';
                            return name;
                          });
+
+// VTK's own XML writer puts <InformationKey> elements (with <Value>s holding numbers) inside a DataArray,
+// before its values, when the array carries information such as its L2-norm range: they are not values.
+TEST(VtkFile, InformationKeysInsideADataArrayAreNotValues) {
+  for (const std::string fixture : {"cube.vtu", "cube_binary.vtu"}) {
+    SCOPED_TRACE(fixture);
+    std::ifstream in(fixtures() / fixture);
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string vtu = text.str();
+    const std::size_t points = vtu.find("<Points>");
+    ASSERT_NE(points, std::string::npos);
+    const std::size_t tag_end = vtu.find('>', vtu.find("<DataArray", points)) + 1;
+    vtu.insert(tag_end,
+               "\n<InformationKey name=\"L2_NORM_RANGE\" location=\"vtkDataArray\" length=\"2\">\n"
+               "<Value index=\"0\">\n0\n</Value>\n<Value index=\"1\">\n1.7320508076\n</Value>\n</InformationKey>\n"
+               "<InformationKey name=\"COMPONENT_NAME\" location=\"vtkAbstractArray\"/>\n");
+    const auto folder = std::filesystem::temp_directory_path() / "mtled_vtk_information_key";
+    std::filesystem::create_directories(folder);
+    std::ofstream(folder / fixture) << vtu;
+    const TetMesh mesh = read_mesh("vtk_file", {{"path", fixture}, {"node_set_arrays", kNodeSets}}, folder);
+    EXPECT_EQ(canonical(mesh, kCubeRegions), reference_cube());
+  }
+}
 
 TEST(VtkFile, RegionArrayChoices) {
   // "none": one region whatever the file holds; an explicit name; without node_set_arrays no node sets.
