@@ -285,7 +285,7 @@ std::vector<fs::path> scene_plugin_paths(const SceneDocument& document) {
   for (const auto& p : *it) {
     if (!p.is_string()) continue;
     fs::path path(p.get<std::string>());
-    paths.push_back(path.is_absolute() ? path : document.directory() / path);
+    paths.push_back((path.is_absolute() ? path : document.directory() / path).lexically_normal());
   }
   return paths;
 }

@@ -104,6 +104,7 @@ class GmshStlSurface final : public MeshSource {
   std::filesystem::path resolve(const std::filesystem::path& scene_directory) const {
     std::filesystem::path file(path_);
     if (file.is_relative() && !scene_directory.empty()) file = scene_directory / file;
+    file = file.lexically_normal();  // messages name the file as a user would
     std::error_code error;
     if (!std::filesystem::exists(file, error))
       throw InputError(

@@ -192,6 +192,13 @@ TEST(GmshFileErrorsWithoutLine, NoTetsEmptyAndMissingFiles) {
   EXPECT_EQ(where_of(error), "/test/path");
   EXPECT_NE(message_of(error).find("does not exist"), std::string::npos) << message_of(error);
   EXPECT_NE(message_of(error).find("cube_msh22.msh"), std::string::npos) << message_of(error);
+
+  // A path through a sibling folder is named normalised, as a user would write it (not "scenes/../meshes").
+  error = read_error("gmsh_file", {{"path", "../meshes/absent.msh"}}, fixtures() / "scenes");
+  EXPECT_NE(message_of(error).find((fixtures() / "meshes" / "absent.msh").lexically_normal().string()),
+            std::string::npos)
+      << message_of(error);
+  EXPECT_EQ(message_of(error).find("/../"), std::string::npos) << message_of(error);
 }
 
 }  // namespace

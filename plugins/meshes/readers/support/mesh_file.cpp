@@ -57,8 +57,9 @@ MeshFileText read_text_file(const fs::path& file, const std::string& where) {
 
 MeshFileText read_mesh_file(const Parameters& parameters, const MeshContext& context) {
   const fs::path given = parameters.string("path");
+  // Normalised (no "scenes/../meshes"), so that messages name the file as a user would.
   const fs::path file =
-      given.is_absolute() || context.scene_directory.empty() ? given : context.scene_directory / given;
+      (given.is_absolute() || context.scene_directory.empty() ? given : context.scene_directory / given).lexically_normal();
   return read_text_file(file, parameters.pointer("path"));
 }
 
