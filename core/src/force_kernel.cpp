@@ -27,31 +27,27 @@ static_assert(hn::MaxLanes(D()) == 4);
 
 // (x, y, z) of the entries' node records (at base + offsets[e]), one lane each.
 HWY_INLINE void load_records(D d, const double* base, const Index* offsets, V& x, V& y, V& z) {
-  {
-    const auto a = hn::Load(d, base + offsets[0]);
-    const auto b = hn::Load(d, base + offsets[1]);
-    const auto c = hn::Load(d, base + offsets[2]);
-    const auto e = hn::Load(d, base + offsets[3]);
-    const auto ab_even = hn::InterleaveLower(a, b), ab_odd = hn::InterleaveUpper(d, a, b);
-    const auto ce_even = hn::InterleaveLower(c, e), ce_odd = hn::InterleaveUpper(d, c, e);
-    x = hn::ConcatLowerLower(d, ce_even, ab_even);
-    y = hn::ConcatLowerLower(d, ce_odd, ab_odd);
-    z = hn::ConcatUpperUpper(d, ce_even, ab_even);
-  }
+  const auto a = hn::Load(d, base + offsets[0]);
+  const auto b = hn::Load(d, base + offsets[1]);
+  const auto c = hn::Load(d, base + offsets[2]);
+  const auto e = hn::Load(d, base + offsets[3]);
+  const auto ab_even = hn::InterleaveLower(a, b), ab_odd = hn::InterleaveUpper(d, a, b);
+  const auto ce_even = hn::InterleaveLower(c, e), ce_odd = hn::InterleaveUpper(d, c, e);
+  x = hn::ConcatLowerLower(d, ce_even, ab_even);
+  y = hn::ConcatLowerLower(d, ce_odd, ab_odd);
+  z = hn::ConcatUpperUpper(d, ce_even, ab_even);
 }
 
 // The entries' node records (at base + offsets[e]) += (x, y, z) of each lane.
 HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double* base) {
-  {
-    const auto zero = hn::Zero(d);
-    const auto xy_even = hn::InterleaveLower(x, y), xy_odd = hn::InterleaveUpper(d, x, y);
-    const auto z_even = hn::InterleaveLower(z, zero), z_odd = hn::InterleaveUpper(d, z, zero);
-    const V entry[4] = {hn::ConcatLowerLower(d, z_even, xy_even), hn::ConcatLowerLower(d, z_odd, xy_odd),
-                                   hn::ConcatUpperUpper(d, z_even, xy_even), hn::ConcatUpperUpper(d, z_odd, xy_odd)};
-    for (int e = 0; e < 4; ++e) {
-      double* record = base + offsets[e];
-      hn::Store(hn::Add(hn::Load(d, record), entry[e]), d, record);
-    }
+  const auto zero = hn::Zero(d);
+  const auto xy_even = hn::InterleaveLower(x, y), xy_odd = hn::InterleaveUpper(d, x, y);
+  const auto z_even = hn::InterleaveLower(z, zero), z_odd = hn::InterleaveUpper(d, z, zero);
+  const V entry[4] = {hn::ConcatLowerLower(d, z_even, xy_even), hn::ConcatLowerLower(d, z_odd, xy_odd),
+                      hn::ConcatUpperUpper(d, z_even, xy_even), hn::ConcatUpperUpper(d, z_odd, xy_odd)};
+  for (int e = 0; e < 4; ++e) {
+    double* record = base + offsets[e];
+    hn::Store(hn::Add(hn::Load(d, record), entry[e]), d, record);
   }
 }
 
@@ -65,7 +61,7 @@ HWY_INLINE void sum_lanes(D d, const V (&f)[9], double (&sums)[9]) {
   }
   sums[8] = hn::GetLane(hn::SumOfLanes(d, f[8]));
 }
-#else
+#else  // one or two lanes: gather, add lane by lane, reduce one by one
 HWY_INLINE void sum_lanes(D d, const V (&f)[9], double (&sums)[9]) {
   for (int c = 0; c < 9; ++c) sums[c] = hn::GetLane(hn::SumOfLanes(d, f[c]));
 }
