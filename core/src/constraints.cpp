@@ -135,7 +135,6 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
               block.components, block.rows.size(), block.row_nodes.size(), a.nonZeros(),
               block.factor.matrixL().nestedExpression().nonZeros());
   const std::size_t size = block.rows.size() * block.components.size();
-  block.residual.assign(size, 0.0);
   block.y.assign(size, 0.0);
   block.work.assign(size, 0.0);
 }
@@ -231,11 +230,10 @@ void ConstraintSystem::solve(const Block& block, std::vector<double>& y, std::ve
 void ConstraintSystem::enforce(std::span<double> u, double alpha) {
   for (Block& block : blocks_) {
     const std::size_t k = block.components.size();
-    constrained_values(block, u, block.residual);  // in place: no allocation in the time step
+    constrained_values(block, u, block.y);  // into the block's own vectors: no allocation in the time step
     for (std::size_t r = 0; r < block.rows.size(); ++r) {
       const Vec3& prescribed = sets_[block.rows[r].set]->values[block.rows[r].entry];
-      for (std::size_t j = 0; j < k; ++j)
-        block.y[k * r + j] = prescribed[block.components[j]] - block.residual[k * r + j];
+      for (std::size_t j = 0; j < k; ++j) block.y[k * r + j] = prescribed[block.components[j]] - block.y[k * r + j];
     }
     solve(block, block.y, block.work);
     add_correction(block, block.y, u);

@@ -87,6 +87,18 @@ HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double*
 }
 #endif
 
+// One row's blocks as raw pointers, for loops that step through them (in locals: the compiler cannot tell that
+// the kernel's stores do not move the rows' arrays, and would reload them after every store).
+struct RowBlocks {
+  std::int64_t count;
+  const double* gradients;  // 3 kBlock per block
+  const Index* records;     // kBlock per block
+};
+HWY_INLINE RowBlocks row_blocks(const GradientRows& rows, Index row) {
+  const std::int64_t begin = rows.block_begin(row);
+  return {rows.block_end(row) - begin, rows.block_gradients(begin), rows.block_records(begin)};
+}
+
 // Asks the caches for one row (its gradients and record offsets).
 HWY_INLINE void prefetch_row(const GradientRows& rows, Index row) {
   const auto* g = reinterpret_cast<const char*>(rows.block_gradients(rows.block_begin(row)));
@@ -111,11 +123,10 @@ void Gather(const GradientRows& rows, const double* u4, Index first, Index prefe
     // One accumulator per component of F, one lane per support entry; the padding entries add 0 x 0.
     V f[9];
     for (auto& v : f) v = hn::Zero(d);
-    // Raw pointers in locals: the compiler cannot tell that the stores do not move the rows' arrays.
-    const std::int64_t blocks = rows.block_end(first + p) - rows.block_begin(first + p);
-    const double* g = rows.block_gradients(rows.block_begin(first + p));
-    const Index* records = rows.block_records(rows.block_begin(first + p));
-    for (std::int64_t b = 0; b < blocks; ++b, g += 3 * kBlock, records += kBlock) {
+    const RowBlocks row = row_blocks(rows, first + p);
+    const double* g = row.gradients;
+    const Index* records = row.records;
+    for (std::int64_t b = 0; b < row.count; ++b, g += 3 * kBlock, records += kBlock) {
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
         V u[3];
         load_records(d, u4, records + j, u[0], u[1], u[2]);
@@ -151,10 +162,10 @@ void Scatter(const GradientRows& rows, const double* xi4, Index first, int count
     if (skip[p]) continue;
     V stress[9];
     for (int c = 0; c < 9; ++c) stress[c] = hn::Set(d, P[c][p]);
-    const std::int64_t blocks = rows.block_end(first + p) - rows.block_begin(first + p);
-    const double* g = rows.block_gradients(rows.block_begin(first + p));
-    const Index* records = rows.block_records(rows.block_begin(first + p));
-    for (std::int64_t b = 0; b < blocks; ++b, g += 3 * kBlock, records += kBlock) {
+    const RowBlocks row = row_blocks(rows, first + p);
+    const double* g = row.gradients;
+    const Index* records = row.records;
+    for (std::int64_t b = 0; b < row.count; ++b, g += 3 * kBlock, records += kBlock) {
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
         V grad[3];
         load_records(d, xi4, records + j, grad[0], grad[1], grad[2]);

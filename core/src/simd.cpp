@@ -5,6 +5,7 @@
 #include <hwy/highway.h>
 #include <hwy/targets.h>
 
+#include <cctype>
 #include <cstdint>
 
 #include "mtled/errors.hpp"

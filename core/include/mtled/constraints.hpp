@@ -57,7 +57,7 @@ class ConstraintSystem {
     std::vector<double> node_values;  // Phi(r, node) / m_node
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor;
     std::vector<double> inverse_diagonal;  // of the factor's D
-    std::vector<double> residual, y, work;  // rows x components
+    std::vector<double> y, work;  // rows x components: the residual, then the multipliers; solver scratch
   };
   void rebuild(std::span<const double> mass);
   void build_block(Block& block, std::span<const double> mass);
