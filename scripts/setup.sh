@@ -3,7 +3,9 @@
 # Usage: scripts/setup.sh [--tests]   (--tests also builds the test suite)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-packages=$(grep -v '^#' scripts/debian-packages.txt | xargs)
+lists=scripts/debian-packages.txt
+[ "${1:-}" = "--tests" ] && lists="$lists scripts/debian-packages-tests.txt"
+packages=$(cat $lists | grep -v '^#' | xargs)
 missing=""
 for p in $packages; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"

@@ -2,11 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <fstream>
-#include <sstream>
 
 #include "mtled/errors.hpp"
 #include "mtled/json.hpp"
+#include "vtk_grid.hpp"
 
 namespace fs = std::filesystem;
 
@@ -35,39 +36,22 @@ fs::path result_file_of(const fs::path& run) {
 }
 
 ResultField read_result_vtu(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "cannot read the result file (is this an mtled output folder?)");
+  // The VTK reader of the vtk_file mesh plugin, so that every form a result may be in (mtled's binary or
+  // ASCII, or a file re-saved by ParaView) reads.
+  const mesh_readers::MeshFileText text = mesh_readers::read_text_file(file, file.string());
+  vtk::ArrayRequest request;
+  request.point_arrays = {"displacement"};
+  const vtk::UnstructuredGrid grid = vtk::read_vtu(text, request);
+  const auto displacement = std::find_if(grid.point_arrays.begin(), grid.point_arrays.end(),
+                                         [](const vtk::DataArray& a) { return a.name == "displacement"; });
+  if (displacement == grid.point_arrays.end() || displacement->components != 3 ||
+      displacement->values.size() != 3 * grid.points.size())
+    throw InputError(file.string(), "not an mtled result: no point array \"displacement\" of 3 components per point");
   ResultField result;
-  std::string line;
-  int line_number = 0;
-  std::vector<Vec3>* target = nullptr;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (line.rfind("<DataArray", 0) == 0) {
-      const std::string tag = line.substr(0, line.find('>'));
-      if (tag.find("Name=\"displacement\"") != std::string::npos) {
-        target = &result.displacement;
-      } else if (line.find("NumberOfComponents=\"3\"") != std::string::npos && line.find("Name=") == std::string::npos) {
-        target = &result.points;
-      } else {
-        target = nullptr;
-      }
-      continue;
-    }
-    if (line.rfind("</DataArray", 0) == 0) {
-      target = nullptr;
-      continue;
-    }
-    if (target == nullptr) continue;
-    std::istringstream values(line);
-    Vec3 v;
-    if (!(values >> v[0] >> v[1] >> v[2]))
-      throw InputError(fmt::format("{}:{}", file.string(), line_number), "expected three numbers");
-    target->push_back(v);
-  }
-  if (result.points.empty() || result.points.size() != result.displacement.size())
-    throw InputError(file.string(), fmt::format("not an mtled result: {} points, {} displacements", result.points.size(),
-                                                result.displacement.size()));
+  result.points = grid.points;
+  for (std::size_t i = 0; i < grid.points.size(); ++i)
+    result.displacement.push_back(
+        {displacement->values[3 * i], displacement->values[3 * i + 1], displacement->values[3 * i + 2]});
   return result;
 }
 

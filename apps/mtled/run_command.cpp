@@ -42,6 +42,10 @@ double peak_rss_mb() {
 
 json vec_json(const Vec3& v) { return json::array({v[0], v[1], v[2]}); }
 
+VtuFormat vtu_format(const Parameters& output) {
+  return output.string("vtu_format") == "ascii" ? VtuFormat::ascii : VtuFormat::binary;
+}
+
 // Records needle.csv and reactions.csv rows, steps/*.vtu snapshots and the progress display.
 class RunObserver final : public StepObserver {
  public:
@@ -49,6 +53,7 @@ class RunObserver final : public StepObserver {
       : folder_(folder),
         history_every_(output.integer("history_every_steps")),
         snapshot_every_(output.integer("every_steps")),
+        format_(vtu_format(output)),
         progress_(progress) {
     if (simulation.needle() != nullptr) {
       needle_ = folder.open_stream("needle.csv");
@@ -58,6 +63,7 @@ class RunObserver final : public StepObserver {
       reactions_ = folder.open_stream("reactions.csv");
       reactions_.out() << "time_s,set,fx_N,fy_N,fz_N\n";
     }
+    if (snapshot_every_ > 0) snapshot(simulation);  // the series starts with the initial state
   }
 
   void on_step(const Simulation& simulation) override {
@@ -73,6 +79,8 @@ class RunObserver final : public StepObserver {
     if (last_recorded_ != simulation.step()) record(simulation);
     needle_.commit();
     reactions_.commit();
+    // ... and ends with the final one, which the run's last step need not be a multiple of every_steps to reach.
+    if (snapshot_every_ > 0 && last_snapshot_ != simulation.step()) snapshot(simulation);
     if (!snapshots_.empty()) {
       folder_.write_file("series.pvd", [&](std::ostream& out) {
         out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
@@ -116,13 +124,15 @@ class RunObserver final : public StepObserver {
   void snapshot(const Simulation& simulation) {
     const std::string file = fmt::format("steps/{:06d}.vtu", simulation.step());
     const auto u = simulation.interpolated_displacement();
-    folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, simulation.model().mesh(), u, {}); });
+    folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, simulation.model().mesh(), u, {}, format_); });
     snapshots_.emplace_back(simulation.time(), file);
+    last_snapshot_ = simulation.step();
   }
 
   const OutputFolder& folder_;
   long history_every_, snapshot_every_;
-  long last_recorded_ = -1;
+  VtuFormat format_;
+  long last_recorded_ = -1, last_snapshot_ = -1;
   OutputFolder::Stream needle_, reactions_;
   std::vector<std::pair<double, std::string>> snapshots_;
   Progress progress_;
@@ -236,7 +246,9 @@ class SceneRun {
     const auto last = d.what == "inverted_material" ? simulation_->previous_displacement() : simulation_->displacement();
     std::vector<double> u(last.size());
     simulation_->model().interpolate(last, u);
-    folder_.write_file("last_good_state.vtu", [&](std::ostream& out) { write_vtu(out, simulation_->model().mesh(), u, {}); });
+    folder_.write_file("last_good_state.vtu", [&](std::ostream& out) {
+      write_vtu(out, simulation_->model().mesh(), u, {}, vtu_format(scene_.output));
+    });
     summary_["last_good_state"] = "last_good_state.vtu";
     write_summary();
     log().error("{}", e.what());
@@ -262,7 +274,9 @@ class SceneRun {
     for (std::size_t i = 0; i < u.size(); i += 3)
       max_displacement = std::max(max_displacement, std::sqrt(u[i] * u[i] + u[i + 1] * u[i + 1] + u[i + 2] * u[i + 2]));
     const auto fields = cell_fields(simulation_->model(), simulation_->displacement(), scene_.output.string_list("cell_data"));
-    folder_.write_file("result.vtu", [&](std::ostream& out) { write_vtu(out, simulation_->model().mesh(), u, fields); });
+    folder_.write_file("result.vtu", [&](std::ostream& out) {
+      write_vtu(out, simulation_->model().mesh(), u, fields, vtu_format(scene_.output));
+    });
     record(solve_time);
     summary_["max_displacement_m"] = max_displacement;
     if (const auto* needle = simulation_->needle()) {

@@ -3,6 +3,12 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <zlib.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <limits>
 #include <sstream>
 
 #include "mtled/errors.hpp"
@@ -73,44 +79,132 @@ void OutputFolder::Stream::commit() {
 
 OutputFolder::Stream OutputFolder::open_stream(const std::string& name) const { return Stream(folder_ / name); }
 
-void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> displacement,
-               const std::vector<CellField>& cell_fields) {
-  const std::size_t n = mesh.points.size();
-  const std::size_t cells = mesh.tets.size();
-  out << "<?xml version=\"1.0\"?>\n"
-      << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-      << "<UnstructuredGrid>\n"
-      << fmt::format("<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", n, cells);
-  out << "<PointData Vectors=\"displacement\">\n"
-      << "<DataArray type=\"Float64\" Name=\"displacement\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (std::size_t i = 0; i < n; ++i)
-    out << fmt::format("{:.17g} {:.17g} {:.17g}\n", displacement[3 * i], displacement[3 * i + 1], displacement[3 * i + 2]);
-  out << "</DataArray>\n<DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">\n";
-  std::vector<int> point_region(n, std::numeric_limits<int>::max());
-  for (std::size_t t = 0; t < cells; ++t)
-    for (Index v : mesh.tets[t]) point_region[v] = std::min(point_region[v], static_cast<int>(mesh.tet_region[t]));
-  for (std::size_t i = 0; i < n; ++i) out << point_region[i] << '\n';
-  out << "</DataArray>\n</PointData>\n<CellData>\n<DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">\n";
-  for (std::size_t t = 0; t < cells; ++t) out << mesh.tet_region[t] << '\n';
-  out << "</DataArray>\n";
-  for (const auto& field : cell_fields) {
-    out << fmt::format("<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"ascii\">\n",
-                       field.name, field.components);
-    for (std::size_t t = 0; t < cells; ++t) {
-      for (int c = 0; c < field.components; ++c)
-        out << fmt::format("{:.10g}{}", field.values[t * field.components + c], c + 1 == field.components ? '\n' : ' ');
-    }
-    out << "</DataArray>\n";
+namespace {
+
+// One DataArray of a result file: its values row by row, the VTK type they are stored as, and the digits
+// they need as text (17: doubles exactly).
+struct VtuArray {
+  std::string name;  // empty for the points, which VTK leaves unnamed
+  std::string type;  // "Float64", "Int64", "Int32" or "UInt8"
+  int components = 1;
+  int digits = 17;
+  std::vector<double> values;
+};
+
+std::vector<unsigned char> raw_bytes(const VtuArray& array) {
+  std::vector<unsigned char> bytes;
+  const auto append = [&bytes](const auto value) {
+    const auto* p = reinterpret_cast<const unsigned char*>(&value);
+    bytes.insert(bytes.end(), p, p + sizeof(value));
+  };
+  for (double v : array.values) {
+    if (array.type == "Float64") append(v);
+    else if (array.type == "Int64") append(static_cast<std::int64_t>(v));
+    else if (array.type == "Int32") append(static_cast<std::int32_t>(v));
+    else append(static_cast<std::uint8_t>(v));
   }
-  out << "</CellData>\n<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n";
-  for (const auto& p : mesh.points) out << fmt::format("{:.17g} {:.17g} {:.17g}\n", p[0], p[1], p[2]);
-  out << "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
-  for (const auto& tet : mesh.tets) out << fmt::format("{} {} {} {}\n", tet[0], tet[1], tet[2], tet[3]);
-  out << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
-  for (std::size_t t = 0; t < cells; ++t) out << 4 * (t + 1) << '\n';
-  out << "</DataArray>\n<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n";
-  for (std::size_t t = 0; t < cells; ++t) out << "10\n";
-  out << "</DataArray>\n</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
+  return bytes;
+}
+
+// VTK's zlib layout: a UInt64 header [number of blocks, block size, size of the last block (0 when full),
+// compressed size of each block], then the blocks, each a zlib stream of up to 32 KiB of the data.
+std::string zlib_blocks(const std::vector<unsigned char>& data) {
+  constexpr std::size_t kBlock = 32768;
+  const std::size_t blocks = (data.size() + kBlock - 1) / kBlock;
+  std::vector<std::uint64_t> header = {blocks, kBlock, data.size() % kBlock};
+  std::string compressed;
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const std::size_t size = std::min(kBlock, data.size() - b * kBlock);
+    std::string block(compressBound(static_cast<uLong>(size)), '\0');
+    uLongf length = static_cast<uLongf>(block.size());
+    if (compress2(reinterpret_cast<Bytef*>(block.data()), &length, data.data() + b * kBlock, static_cast<uLong>(size),
+                  Z_DEFAULT_COMPRESSION) != Z_OK)
+      throw std::runtime_error("zlib could not compress a result array");
+    header.push_back(length);
+    compressed.append(block.data(), length);
+  }
+  std::string out(reinterpret_cast<const char*>(header.data()), header.size() * sizeof(std::uint64_t));
+  return out + compressed;
+}
+
+std::string data_array_tag(const VtuArray& array, const std::string& format_attributes) {
+  return fmt::format("<DataArray type=\"{}\"{} NumberOfComponents=\"{}\" {}>", array.type,
+                     array.name.empty() ? "" : fmt::format(" Name=\"{}\"", array.name), array.components,
+                     format_attributes);
+}
+
+std::vector<VtuArray> result_arrays(const TetMesh& mesh, std::span<const double> displacement,
+                                    const std::vector<CellField>& cell_fields) {
+  const std::size_t n = mesh.points.size(), cells = mesh.tets.size();
+  std::vector<VtuArray> arrays;
+  arrays.push_back({"displacement", "Float64", 3, 17, {displacement.begin(), displacement.end()}});
+  std::vector<double> point_region(n, std::numeric_limits<int>::max());
+  for (std::size_t t = 0; t < cells; ++t)
+    for (Index v : mesh.tets[t]) point_region[v] = std::min<double>(point_region[v], mesh.tet_region[t]);
+  arrays.push_back({"region", "Int32", 1, 10, std::move(point_region)});
+  arrays.push_back({"region", "Int32", 1, 10, {mesh.tet_region.begin(), mesh.tet_region.end()}});
+  for (const auto& field : cell_fields) arrays.push_back({field.name, "Float64", field.components, 10, field.values});
+  VtuArray points{"", "Float64", 3, 17, {}};
+  for (const auto& p : mesh.points) points.values.insert(points.values.end(), p.begin(), p.end());
+  arrays.push_back(std::move(points));
+  VtuArray connectivity{"connectivity", "Int64", 1, 10, {}}, offsets{"offsets", "Int64", 1, 10, {}};
+  for (std::size_t t = 0; t < cells; ++t) {
+    connectivity.values.insert(connectivity.values.end(), mesh.tets[t].begin(), mesh.tets[t].end());
+    offsets.values.push_back(static_cast<double>(4 * (t + 1)));
+  }
+  arrays.push_back(std::move(connectivity));
+  arrays.push_back(std::move(offsets));
+  arrays.push_back({"types", "UInt8", 1, 3, std::vector<double>(cells, 10.0)});  // VTK_TETRA
+  return arrays;
+}
+
+}  // namespace
+
+void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> displacement,
+               const std::vector<CellField>& cell_fields, VtuFormat format) {
+  const std::vector<VtuArray> arrays = result_arrays(mesh, displacement, cell_fields);
+  const bool binary = format == VtuFormat::binary;
+  std::vector<std::string> appended;  // binary: each array's compressed block, in file order
+  std::size_t offset = 0;
+  const auto write_array = [&](const VtuArray& array) {
+    if (binary) {
+      appended.push_back(zlib_blocks(raw_bytes(array)));
+      out << data_array_tag(array, fmt::format("format=\"appended\" offset=\"{}\"", offset)) << "</DataArray>\n";
+      offset += appended.back().size();
+      return;
+    }
+    out << data_array_tag(array, "format=\"ascii\"") << '\n';
+    for (std::size_t i = 0; i < array.values.size(); ++i)
+      out << fmt::format("{:.{}g}{}", array.values[i], array.digits,
+                         (i + 1) % static_cast<std::size_t>(array.components) == 0 ? '\n' : ' ');
+    out << "</DataArray>\n";
+  };
+  out << "<?xml version=\"1.0\"?>\n"
+      << fmt::format("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"{}\" header_type=\"UInt64\"{}>\n",
+                     std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian",
+                     binary ? " compressor=\"vtkZLibDataCompressor\"" : "")
+      << "<UnstructuredGrid>\n";
+  // A mesh from 3D Slicer tagged RAS keeps its tag (Slicer reads an untagged file as LPS, its default), as
+  // Slicer writes it: a string array of the characters and a 0.
+  if (mesh.coordinate_system == "RAS")
+    out << "<FieldData>\n<Array type=\"String\" Name=\"SPACE\" NumberOfTuples=\"1\" format=\"ascii\">82 65 83 0"
+           "</Array>\n</FieldData>\n";
+  out << fmt::format("<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", mesh.points.size(), mesh.tets.size())
+      << "<PointData Vectors=\"displacement\">\n";
+  const std::size_t first_cell_array = 2, points = arrays.size() - 4;
+  for (std::size_t a = 0; a < arrays.size(); ++a) {
+    if (a == first_cell_array) out << "</PointData>\n<CellData>\n";
+    if (a == points) out << "</CellData>\n<Points>\n";
+    if (a == points + 1) out << "</Points>\n<Cells>\n";
+    write_array(arrays[a]);
+  }
+  out << "</Cells>\n</Piece>\n</UnstructuredGrid>\n";
+  if (binary) {
+    out << "<AppendedData encoding=\"raw\">\n_";
+    for (const auto& block : appended) out.write(block.data(), static_cast<std::streamsize>(block.size()));
+    out << "\n</AppendedData>\n";
+  }
+  out << "</VTKFile>\n";
 }
 
 }  // namespace mtled

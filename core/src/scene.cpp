@@ -334,6 +334,11 @@ const ComponentDeclaration& output_declaration() {
         .defaults(json::array())
         .choices({"green_strain", "cauchy_stress", "von_mises_stress", "jacobian"})
         .doc("per-cell fields in result.vtu, evaluated at each tet's integration points (averaged)");
+    d.string("vtu_format")
+        .defaults("binary")
+        .choices({"binary", "ascii"})
+        .doc("how result.vtu and steps/*.vtu store their arrays: \"binary\" (zlib-compressed, appended raw, as VTK "
+             "and ParaView write them) or \"ascii\" (text, about three times larger); both exact");
     return d;
   }();
   return declaration;

@@ -19,6 +19,9 @@ struct TetMesh {
   std::vector<std::string> region_names;  // at least one ("all" when the source has none)
   std::map<std::string, std::vector<Index>> node_sets;
   std::string source;  // file path or generator description, for messages
+  // The frame the coordinates are in when the file records it ("LPS" or "RAS": 3D Slicer's "SPACE"), else
+  // empty. Results carry it on, so that Slicer places them where the mesh was.
+  std::string coordinate_system;
 
   Index node_count() const { return static_cast<Index>(points.size()); }
   Index tet_count() const { return static_cast<Index>(tets.size()); }

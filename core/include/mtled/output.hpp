@@ -50,9 +50,14 @@ struct CellField {
   std::vector<double> values;
 };
 
-// An unstructured-grid VTK XML file (ASCII, full precision) readable by ParaView and 3D Slicer: the
-// reference mesh with point data "displacement" and "region" and the given cell data.
+// How result files store their arrays: binary, zlib-compressed and appended raw (VTK's and ParaView's
+// default, about a third of the text's size), or ASCII text with full precision.
+enum class VtuFormat { binary, ascii };
+
+// An unstructured-grid VTK XML file readable by ParaView, VTK, meshio and 3D Slicer: the reference mesh
+// with point data "displacement" and "region" and the given cell data. Doubles are written exactly in
+// both formats.
 void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> displacement,
-               const std::vector<CellField>& cell_fields);
+               const std::vector<CellField>& cell_fields, VtuFormat format = VtuFormat::binary);
 
 }  // namespace mtled

@@ -1,4 +1,4 @@
-// VTK mesh reader: legacy .vtk (ASCII) and XML .vtu unstructured grids, chosen by the file extension.
+// VTK mesh reader: legacy .vtk (ASCII, binary) and XML .vtu (plain, zlib) unstructured grids, chosen by the file extension.
 // 4-node tetrahedra (VTK type 10) become the mesh; an integer cell array names the region of each tet; point
 // arrays named in "node_set_arrays" become node sets.
 #include <fmt/format.h>
@@ -40,12 +40,14 @@ class VtkFileReader final : public MeshSource {
  public:
   static void declare(ComponentDeclaration& d) {
     d.summary(
-        "Reads a VTK unstructured grid of 4-node tets: legacy .vtk (ASCII) or XML .vtu (ascii, base64 or raw "
-        "appended data, uncompressed), chosen by the file extension. Other cells (vertices, lines, triangles) "
+        "Reads a VTK unstructured grid of 4-node tets: legacy .vtk (ASCII or binary, versions 2 to 5.1) or XML "
+        ".vtu (ascii, inline base64, or appended base64 or raw data, uncompressed or zlib-compressed: what VTK, "
+        "ParaView, meshio and 3D Slicer save), chosen by the file extension. 3D Slicer's \"SPACE\" tag (LPS or "
+        "RAS) is kept with the mesh and carried into results. Other cells (vertices, lines, triangles) "
         "are skipped; other volume cells are refused. Regions come from an integer cell array; node sets from "
         "the point arrays named in \"node_set_arrays\". Reads mtled's own result.vtu. The example reads the "
         "fixture tests/data/meshes/cube.vtu (a path from the source tree's root).");
-    mesh_readers::declare_file_parameters(d, "VTK: legacy .vtk in ASCII, or XML .vtu");
+    mesh_readers::declare_file_parameters(d, "VTK: legacy .vtk (ASCII or binary), or XML .vtu");
     d.string("region_array")
         .defaults("auto")
         .doc(
@@ -96,6 +98,7 @@ class VtkFileReader final : public MeshSource {
     TetMesh mesh;
     mesh.points = std::move(grid.points);
     mesh.tets = std::move(grid.tets);
+    mesh.coordinate_system = grid.coordinate_system;
     assign_regions(mesh, grid, region_array, file.label);
     for (const auto& name : node_set_arrays) add_node_set(mesh, grid, name);
     mesh_readers::finish_mesh(mesh, parameters_.number("scale"), file.label);

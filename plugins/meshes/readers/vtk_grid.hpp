@@ -2,9 +2,12 @@
 // What the two VTK parsers (legacy .vtk, XML .vtu) hand to VtkFileReader: the tets of an unstructured
 // grid and the data arrays it asked for.
 #include <array>
+#include <cstddef>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "mtled/types.hpp"
@@ -35,6 +38,7 @@ struct UnstructuredGrid {
   std::size_t cell_count = 0;
   std::vector<DataArray> cell_arrays;
   std::vector<DataArray> point_arrays;
+  std::string coordinate_system;  // "LPS" or "RAS" when the file says (3D Slicer's "SPACE"), else empty
 };
 
 // Adds the cells of one piece: 4-node tets (VTK_TETRA = 10) are kept, vertices, lines and surface cells are
@@ -44,6 +48,18 @@ struct UnstructuredGrid {
 void add_cells(UnstructuredGrid& grid, std::span<const long long> ends, std::span<const long long> connectivity,
                std::span<const long long> types, std::size_t first_point, std::size_t piece_points,
                const std::function<std::string(std::size_t)>& where);
+
+// How a binary array stores its values. XML names ("Float64", "Int32", ...) and legacy names ("double",
+// "int", "vtktypeint64", ...) map to these.
+enum class ScalarKind { signed_integer, unsigned_integer, real };
+struct ScalarType {
+  ScalarKind kind;
+  std::size_t size;
+};
+std::optional<ScalarType> xml_scalar_type(std::string_view name);
+std::optional<ScalarType> legacy_scalar_type(std::string_view name);
+// The value of `type` stored at `data` in the given byte order, as a double (integers up to 2^53 exactly).
+double decode_scalar(const unsigned char* data, ScalarType type, bool big_endian);
 
 UnstructuredGrid read_legacy_vtk(const mesh_readers::MeshFileText& file, const ArrayRequest& request);
 UnstructuredGrid read_vtu(const mesh_readers::MeshFileText& file, const ArrayRequest& request);

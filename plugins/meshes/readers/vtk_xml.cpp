@@ -1,5 +1,5 @@
 // XML VTK unstructured-grid reader (.vtu, "VTK File Formats", VTK User's Guide): DataArrays in "ascii",
-// inline "binary" (base64) and "appended" (base64 or raw) form, uncompressed. Only the few tags a .vtu has
+// inline "binary" (base64) and "appended" (base64 or raw) form, uncompressed or zlib-compressed. Only the few tags a .vtu has
 // are understood; the scan stops at <AppendedData>, whose raw bytes may contain anything.
 #include <fmt/format.h>
 
@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <cstring>
 #include <optional>
+
+#include <zlib.h>
 
 #include "mtled/errors.hpp"
 #include "support/text_cursor.hpp"
@@ -203,27 +205,6 @@ class Base64Reader {
   int available_ = 0, used_ = 0;
 };
 
-enum class ScalarKind { signed_integer, unsigned_integer, real };
-
-struct ScalarType {
-  ScalarKind kind;
-  std::size_t size;
-};
-
-std::optional<ScalarType> scalar_type(std::string_view name) {
-  if (name == "Int8") return ScalarType{ScalarKind::signed_integer, 1};
-  if (name == "UInt8") return ScalarType{ScalarKind::unsigned_integer, 1};
-  if (name == "Int16") return ScalarType{ScalarKind::signed_integer, 2};
-  if (name == "UInt16") return ScalarType{ScalarKind::unsigned_integer, 2};
-  if (name == "Int32") return ScalarType{ScalarKind::signed_integer, 4};
-  if (name == "UInt32") return ScalarType{ScalarKind::unsigned_integer, 4};
-  if (name == "Int64") return ScalarType{ScalarKind::signed_integer, 8};
-  if (name == "UInt64") return ScalarType{ScalarKind::unsigned_integer, 8};
-  if (name == "Float32") return ScalarType{ScalarKind::real, 4};
-  if (name == "Float64") return ScalarType{ScalarKind::real, 8};
-  return std::nullopt;
-}
-
 // A DataArray's text without the elements VTK nests in it before the values (<InformationKey> with its <Value>s:
 // a range or a component name), blanked out so that line numbers stay true.
 std::string without_child_elements(std::string_view content) {
@@ -275,6 +256,7 @@ class VtuParser {
     scan();
     UnstructuredGrid grid;
     for (auto& piece : pieces_) add_piece(grid, piece);
+    grid.coordinate_system = coordinate_system();
     return grid;
   }
 
@@ -315,6 +297,8 @@ class VtuParser {
         section = Section::cell_data;
       } else if (name == "FieldData") {
         section = Section::other;
+      } else if (name == "Array" && section == Section::other && tag->attribute("Name") == "SPACE") {
+        space_array_ = read_array_tag(*tag);  // 3D Slicer's string field data "SPACE": "LPS" or "RAS"
       } else if (name == "DataArray") {
         ArraySpec array = read_array_tag(*tag);
         if (piece == nullptr || section == Section::none || section == Section::other) continue;
@@ -377,7 +361,7 @@ class VtuParser {
                          fmt::format("NumberOfComponents {} is not a count from 1", quote_token(*components)));
       array.components = static_cast<int>(*c);
     }
-    if (!scalar_type(array.type))
+    if (tag.name == "DataArray" && !xml_scalar_type(array.type))
       throw InputError(scanner_.where(tag.begin),
                        fmt::format("DataArray {} has type {}: expected Int8 ... Int64, UInt8 ... UInt64, Float32 or "
                                    "Float64",
@@ -392,7 +376,7 @@ class VtuParser {
       if (!tag.self_closing) skip_to_close(tag);
     } else if (array.format == "ascii" || array.format == "binary") {
       if (tag.self_closing) return array;
-      const std::size_t close = scanner_.text().find("</DataArray", tag.end);
+      const std::size_t close = scanner_.text().find(fmt::format("</{}", tag.name), tag.end);
       if (close == std::string_view::npos)
         throw InputError(scanner_.where(tag.begin), fmt::format("DataArray {} is never closed: the file is truncated; "
                                                                 "save it again",
@@ -410,8 +394,9 @@ class VtuParser {
 
   void skip_to_close(const XmlTag& open) {
     while (const auto tag = scanner_.next())
-      if (tag->closing && tag->name == "DataArray") return;
-    throw InputError(scanner_.where(open.begin), "a DataArray is never closed: the file is truncated; save it again");
+      if (tag->closing && tag->name == open.name) return;
+    throw InputError(scanner_.where(open.begin),
+                     fmt::format("a {} is never closed: the file is truncated; save it again", open.name));
   }
 
   void place_array(PieceSpec& piece, Section section, ArraySpec array) {
@@ -458,10 +443,25 @@ class VtuParser {
 
   std::string array_where(const ArraySpec& array) const { return fmt::format("{}:{}", scanner_.label(), array.line); }
 
+  // The frame 3D Slicer recorded: a string array's characters, ascii (as numbers) or binary.
+  std::string coordinate_system() {
+    if (!space_array_.present || space_array_.type != "String") return "";
+    std::string text;
+    if (space_array_.format == "ascii") {
+      TextCursor cursor(space_array_.content, scanner_.label(), scanner_.line_at(space_array_.content_begin));
+      while (const auto token = cursor.next_token())
+        text += static_cast<char>(mesh_readers::to_integer(*token, cursor, "a character code of field \"SPACE\""));
+    } else {
+      for (unsigned char c : binary_bytes(space_array_)) text += static_cast<char>(c);
+    }
+    text = text.substr(0, text.find('\0'));
+    return text == "LPS" || text == "RAS" ? text : "";
+  }
+
   // All values of `array` as doubles (integers up to 2^53 are exact).
   std::vector<double> decode(const ArraySpec& array) {
     std::vector<double> values;
-    const ScalarType type = *scalar_type(array.type);
+    const ScalarType type = *xml_scalar_type(array.type);
     if (array.format == "ascii") {
       const std::string content = without_child_elements(array.content);
       TextCursor cursor(content, scanner_.label(), scanner_.line_at(array.content_begin));
@@ -469,48 +469,13 @@ class VtuParser {
       while (const auto token = cursor.next_token()) values.push_back(mesh_readers::to_real(*token, cursor, what));
       return values;
     }
-    if (!compressor_.empty())
-      throw InputError(fmt::format("{}:{}", scanner_.label(), compressor_line_),
-                       fmt::format("the file is compressed ({}): mtled reads uncompressed .vtu files; save it without "
-                                   "compression (ParaView: Save Data, \"Compressor Type\" None; VTK: "
-                                   "writer.SetCompressorTypeToNone(); meshio: compression=None) or as ascii",
-                                   compressor_));
-    std::vector<unsigned char> bytes;
-    if (array.format == "binary") {
-      const std::string content = without_child_elements(array.content);
-      Base64Reader reader(content, 0);
-      read_block(
-          array, [&](std::size_t n) { return reader.read(n, bytes); }, bytes);
-    } else {
-      if (appended_start_ == 0)
-        throw InputError(array_where(array), fmt::format("DataArray \"{}\" is appended but the file has no "
-                                                         "<AppendedData>: it is truncated; save it again",
-                                                         array.name));
-      const std::string_view text = scanner_.text();
-      if (appended_base64_) {
-        Base64Reader reader(text, appended_start_ + array.offset);
-        read_block(
-            array, [&](std::size_t n) { return reader.read(n, bytes); }, bytes);
-      } else {
-        std::size_t position = appended_start_ + array.offset;
-        read_block(
-            array,
-            [&](std::size_t n) {
-              if (position > text.size() || text.size() - position < n) return false;
-              bytes.insert(bytes.end(), text.begin() + static_cast<std::ptrdiff_t>(position),
-                           text.begin() + static_cast<std::ptrdiff_t>(position + n));
-              position += n;
-              return true;
-            },
-            bytes);
-      }
-    }
+    const std::vector<unsigned char> bytes = binary_bytes(array);
     if (bytes.size() % type.size != 0)
       throw InputError(array_where(array), fmt::format("DataArray \"{}\" holds {} bytes, not a whole number of {}-byte "
                                                        "values: the file is damaged; save it again",
                                                        array.name, bytes.size(), type.size));
     values.resize(bytes.size() / type.size);
-    for (std::size_t i = 0; i < values.size(); ++i) values[i] = convert(&bytes[i * type.size], type);
+    for (std::size_t i = 0; i < values.size(); ++i) values[i] = decode_scalar(&bytes[i * type.size], type, big_endian_);
     for (double v : values)
       if (!std::isfinite(v))
         throw InputError(array_where(array),
@@ -518,86 +483,92 @@ class VtuParser {
     return values;
   }
 
-  // A binary block: a header with the byte count (UInt32 or UInt64), then the bytes. Leaves the data in
-  // `bytes`.
-  template <class Read>
-  void read_block(const ArraySpec& array, Read read, std::vector<unsigned char>& bytes) {
-    if (!read(header_size_))
-      throw InputError(array_where(array), fmt::format("the binary data of DataArray \"{}\" ends before its header: "
-                                                       "the file is truncated or damaged; save it again",
+  // The bytes of a binary array (inline base64, or appended base64 or raw), uncompressed.
+  std::vector<unsigned char> binary_bytes(const ArraySpec& array) {
+    if (!compressor_.empty() && compressor_ != "vtkZLibDataCompressor")
+      throw InputError(fmt::format("{}:{}", scanner_.label(), compressor_line_),
+                       fmt::format("the file is compressed with {}: mtled reads zlib-compressed and uncompressed "
+                                   ".vtu files; save it with zlib (ParaView: Save Data, \"Compressor Type\" ZLib; "
+                                   "VTK: writer.SetCompressorTypeToZLib()) or without compression",
+                                   compressor_));
+    if (array.format == "binary") {
+      const std::string content = without_child_elements(array.content);
+      Base64Reader reader(content, 0);
+      return read_block(array, [&](std::size_t n, std::vector<unsigned char>& out) { return reader.read(n, out); });
+    }
+    if (appended_start_ == 0)
+      throw InputError(array_where(array), fmt::format("DataArray \"{}\" is appended but the file has no "
+                                                       "<AppendedData>: it is truncated; save it again",
                                                        array.name));
-    // The byte count as an integer, not through convert(): as a double, a count near 2^64 rounds up to 2^64,
-    // which std::uint64_t cannot hold (undefined behaviour; found by tests/fuzz with UBSan).
-    std::uint64_t size = 0;
-    for (std::size_t i = 0; i < header_size_; ++i) size = (size << 8) | bytes[big_endian_ ? i : header_size_ - 1 - i];
-    bytes.clear();
-    if (size > (std::uint64_t{1} << 36) || !read(static_cast<std::size_t>(size)))
-      throw InputError(array_where(array), fmt::format("DataArray \"{}\" announces {} bytes but the file holds fewer: "
-                                                       "it is truncated or damaged; save it again",
-                                                       array.name, size));
+    const std::string_view text = scanner_.text();
+    if (appended_base64_) {
+      Base64Reader reader(text, appended_start_ + array.offset);
+      return read_block(array, [&](std::size_t n, std::vector<unsigned char>& out) { return reader.read(n, out); });
+    }
+    std::size_t position = appended_start_ + array.offset;
+    return read_block(array, [&](std::size_t n, std::vector<unsigned char>& out) {
+      if (position > text.size() || text.size() - position < n) return false;
+      out.insert(out.end(), text.begin() + static_cast<std::ptrdiff_t>(position),
+                 text.begin() + static_cast<std::ptrdiff_t>(position + n));
+      position += n;
+      return true;
+    });
   }
 
-  double convert(const unsigned char* data, ScalarType type) const {
-    unsigned char buffer[8];
-    std::memcpy(buffer, data, type.size);
-    if (big_endian_)
-      for (std::size_t i = 0; i < type.size / 2; ++i) std::swap(buffer[i], buffer[type.size - 1 - i]);
-    switch (type.kind) {
-      case ScalarKind::real: {
-        if (type.size == 4) {
-          float f;
-          std::memcpy(&f, buffer, 4);
-          return f;
-        }
-        double d;
-        std::memcpy(&d, buffer, 8);
-        return d;
-      }
-      case ScalarKind::signed_integer:
-        switch (type.size) {
-          case 1: {
-            std::int8_t v;
-            std::memcpy(&v, buffer, 1);
-            return v;
-          }
-          case 2: {
-            std::int16_t v;
-            std::memcpy(&v, buffer, 2);
-            return v;
-          }
-          case 4: {
-            std::int32_t v;
-            std::memcpy(&v, buffer, 4);
-            return v;
-          }
-          default: {
-            std::int64_t v;
-            std::memcpy(&v, buffer, 8);
-            return static_cast<double>(v);
-          }
-        }
-      case ScalarKind::unsigned_integer:
-        switch (type.size) {
-          case 1:
-            return buffer[0];
-          case 2: {
-            std::uint16_t v;
-            std::memcpy(&v, buffer, 2);
-            return v;
-          }
-          case 4: {
-            std::uint32_t v;
-            std::memcpy(&v, buffer, 4);
-            return v;
-          }
-          default: {
-            std::uint64_t v;
-            std::memcpy(&v, buffer, 8);
-            return static_cast<double>(v);
-          }
-        }
+  // An array's block. Uncompressed: a header with the byte count, then the bytes. Compressed (VTK's
+  // vtkZLibDataCompressor): a header [number of blocks, block size, size of the last block (0: full),
+  // compressed size of each block], then the blocks, each a zlib stream. Header integers are header_type.
+  template <class Read>
+  std::vector<unsigned char> read_block(const ArraySpec& array, Read read) {
+    std::vector<unsigned char> scratch;
+    const auto header_integer = [&] {
+      scratch.clear();
+      if (!read(header_size_, scratch))
+        throw InputError(array_where(array), fmt::format("the binary data of DataArray \"{}\" ends before its "
+                                                         "header: the file is truncated or damaged; save it again",
+                                                         array.name));
+      // As an integer, not through decode_scalar(): as a double, a count near 2^64 rounds up to 2^64, which
+      // std::uint64_t cannot hold (undefined behaviour; found by tests/fuzz with UBSan).
+      std::uint64_t value = 0;
+      for (std::size_t i = 0; i < header_size_; ++i)
+        value = (value << 8) | scratch[big_endian_ ? i : header_size_ - 1 - i];
+      return value;
+    };
+    const auto truncated = [&](std::uint64_t size) {
+      return InputError(array_where(array), fmt::format("DataArray \"{}\" announces {} bytes but the file holds "
+                                                        "fewer: it is truncated or damaged; save it again",
+                                                        array.name, size));
+    };
+    constexpr std::uint64_t kLargest = std::uint64_t{1} << 36;  // no mesh file is larger: a damaged count
+    std::vector<unsigned char> bytes;
+    if (compressor_.empty()) {
+      const std::uint64_t size = header_integer();
+      if (size > kLargest || !read(static_cast<std::size_t>(size), bytes)) throw truncated(size);
+      return bytes;
     }
-    return 0.0;
+    const std::uint64_t blocks = header_integer(), block_size = header_integer(), last_size = header_integer();
+    if (block_size > kLargest || last_size > block_size || (blocks > 0 && block_size == 0) ||
+        blocks > kLargest / std::max<std::uint64_t>(block_size, 1))
+      throw InputError(array_where(array), fmt::format("the compression header of DataArray \"{}\" is damaged ({} "
+                                                       "blocks of {} bytes); save the file again",
+                                                       array.name, blocks, block_size));
+    std::vector<std::uint64_t> compressed_sizes;  // grown, not sized: a damaged count fails at the file's end
+    for (std::uint64_t b = 0; b < blocks; ++b) compressed_sizes.push_back(header_integer());
+    for (std::uint64_t b = 0; b < blocks; ++b) {
+      const std::uint64_t expected = (b + 1 == blocks && last_size != 0) ? last_size : block_size;
+      const std::uint64_t size = compressed_sizes[static_cast<std::size_t>(b)];
+      scratch.clear();
+      if (size > kLargest || !read(static_cast<std::size_t>(size), scratch)) throw truncated(size);
+      const std::size_t at = bytes.size();
+      bytes.resize(at + static_cast<std::size_t>(expected));
+      uLongf produced = static_cast<uLongf>(expected);
+      if (uncompress(bytes.data() + at, &produced, scratch.data(), static_cast<uLong>(size)) != Z_OK ||
+          produced != expected)
+        throw InputError(array_where(array), fmt::format("block {} of {} of DataArray \"{}\" does not decompress to "
+                                                         "its {} bytes: the file is damaged; save it again",
+                                                         b + 1, blocks, array.name, expected));
+    }
+    return bytes;
   }
 
   std::vector<long long> decode_integers(const ArraySpec& array, std::size_t expected, std::string_view role) {
@@ -684,6 +655,7 @@ class VtuParser {
   bool big_endian_ = false;
   std::size_t header_size_ = 4;
   std::string compressor_;
+  ArraySpec space_array_;
   long compressor_line_ = 0;
   bool appended_base64_ = false;
   std::size_t appended_start_ = 0;

@@ -17,6 +17,15 @@ std::vector<Reading> cube_readings() {
           {"gmsh_file", {{"path", "cube_msh41.msh"}}, {}},
           {"vtk_file", {{"path", "cube.vtk"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
           {"vtk_file", {{"path", "cube_appended.vtu"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          // Written by VTK 9.1 itself, meshio 5.0 and as 3D Slicer saves models (see tests/data/meshes/README.md).
+          {"vtk_file", {{"path", "cube_vtk_zlib.vtu"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"vtk_file", {{"path", "cube_vtk_zlib_raw.vtu"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"vtk_file", {{"path", "cube_vtk_zlib_inline.vtu"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"vtk_file", {{"path", "cube_slicer.vtu"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"vtk_file", {{"path", "cube_slicer.vtk"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"vtk_file", {{"path", "cube_vtk_binary51.vtk"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"vtk_file", {{"path", "cube_meshio.vtu"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
+          {"vtk_file", {{"path", "cube_meshio.vtk"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
           {"abaqus_file", {{"path", "cube.inp"}}, {}}};
 }
 
@@ -28,6 +37,15 @@ TEST(CrossFormat, TheCubeIsTheSameMeshInEveryFormat) {
     const TetMesh mesh = read_mesh(reading.reader, reading.block);
     EXPECT_EQ(canonical(mesh, reading.rename), reference) << reading.reader << " " << reading.block.dump();
   }
+}
+
+TEST(CrossFormat, SlicersCoordinateSystemTagIsKept) {
+  // 3D Slicer records the frame of a saved model: "SPACE=LPS" in a legacy file's title line, a string field
+  // "SPACE" in a .vtu. Files without it (VTK's, meshio's) leave the mesh untagged.
+  for (const std::string file : {"cube_slicer.vtu", "cube_slicer.vtk"})
+    EXPECT_EQ(read_mesh("vtk_file", {{"path", file}}).coordinate_system, "LPS") << file;
+  for (const std::string file : {"cube_vtk_zlib.vtu", "cube.vtk", "cube_meshio.vtk"})
+    EXPECT_EQ(read_mesh("vtk_file", {{"path", file}}).coordinate_system, "") << file;
 }
 
 TEST(CrossFormat, EveryReadersMeshPassesCheckMesh) {

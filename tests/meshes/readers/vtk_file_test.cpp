@@ -98,15 +98,24 @@ TEST(VtkFile, ScaleMultipliesCoordinates) {
     for (int d = 0; d < 3; ++d) EXPECT_EQ(scaled.points[i][d], metres.points[i][d] * 0.001);
 }
 
-// mtled's result.vtu (core write_vtu) read back as a mesh: same points (written with 17 digits: exact), same
-// tets in the same order, regions named by their index.
+void expect_round_trip(const TetMesh& original, const std::string& test, VtuFormat format);
+
+// mtled's result.vtu (core write_vtu) read back as a mesh, in both formats: same points (binary doubles, or
+// 17 digits: exact), same tets in the same order, regions named by their index.
 void expect_round_trip(const TetMesh& original, const std::string& test) {
+  for (const VtuFormat format : {VtuFormat::binary, VtuFormat::ascii}) {
+    SCOPED_TRACE(format == VtuFormat::binary ? "binary" : "ascii");
+    expect_round_trip(original, test, format);
+  }
+}
+
+void expect_round_trip(const TetMesh& original, const std::string& test, VtuFormat format) {
   std::vector<double> displacement(3 * original.points.size(), 1e-3);
   std::vector<CellField> fields{{"stress", 6, std::vector<double>(6 * original.tets.size(), 1.0)}};
   const auto dir = scratch_dir("vtk_file/" + test);
   {
-    std::ofstream out(dir / "result.vtu");
-    write_vtu(out, original, displacement, fields);
+    std::ofstream out(dir / "result.vtu", std::ios::binary);
+    write_vtu(out, original, displacement, fields, format);
   }
   const TetMesh read = read_mesh("vtk_file", {{"path", "result.vtu"}}, dir);
   ASSERT_EQ(read.points.size(), original.points.size());
@@ -182,7 +191,14 @@ std::string vtu(const std::string& cells, const std::string& types, const std::s
 INSTANTIATE_TEST_SUITE_P(
     Cases, VtkFileErrors,
     ::testing::Values(
-        BadVtk{"legacy_binary", "m.vtk", "# vtk DataFile Version 3.0\ntest\nBINARY\n", 3, "save the mesh as ASCII"},
+        // Binary legacy files: values that end early, and a type that is not a number.
+        BadVtk{"binary_truncated_points", "m.vtk",
+               "# vtk DataFile Version 3.0\ntest\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 2 float\n" +
+                   std::string(12, '\0'),
+               6, "the file ends while reading POINTS"},
+        BadVtk{"binary_string_points", "m.vtk",
+               "# vtk DataFile Version 3.0\ntest\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 string\nabc\n", 5,
+               "binary values of type \"string\""},
         BadVtk{"not_vtk", "m.vtk", "hello\n", 1, "starts with \"# vtk DataFile Version"},
         BadVtk{"polydata", "m.vtk", "# vtk DataFile Version 2.0\nt\nASCII\nDATASET POLYDATA\n", 4, "UNSTRUCTURED_GRID"},
         // Cut in the middle of POINTS: the last line read is 7, in point 2 of 5.
@@ -202,8 +218,15 @@ INSTANTIATE_TEST_SUITE_P(
         BadVtk{"cells_size", "m.vtk", kLegacyHead + kPoints + "CELLS 1 6\n4 0 1 2 3\nCELL_TYPES 1\n10\n", 11,
                "CELLS announces 6 integers but its 1 cells hold 5"},
         BadVtk{"no_tets", "m.vtk", kLegacyHead + kPoints + "CELLS 1 4\n3 0 1 2\nCELL_TYPES 1\n5\n", 0, "no tetrahedra"},
-        BadVtk{"compressed", "m.vtu", vtu("AAAA", "10", " compressor=\"vtkZLibDataCompressor\"", "binary"), 2,
-               "SetCompressorTypeToNone"},
+        BadVtk{"lz4_compressed", "m.vtu", vtu("AAAA", "10", " compressor=\"vtkLZ4DataCompressor\"", "binary"), 2,
+               "SetCompressorTypeToZLib"},
+        // A zlib header (one block of 32 bytes, 8 compressed) before 8 bytes that are not a zlib stream.
+        BadVtk{"zlib_damaged", "m.vtu",
+               vtu("AQAAACAAAAAgAAAACAAAAA==AAAAAAAAAAA=", "10", " compressor=\"vtkZLibDataCompressor\"", "binary"), 9,
+               "block 1 of 1 of DataArray \"connectivity\" does not decompress"},
+        BadVtk{"zlib_huge_block_count", "m.vtu",
+               vtu("/////yAAAAAgAAAA", "10", " compressor=\"vtkZLibDataCompressor\"", "binary"), 9,
+               "compression header of DataArray \"connectivity\" is damaged"},
         BadVtk{"vtu_not_integer", "m.vtu", vtu("0 1 2 x", "10"), 9, "found \"x\""},
         BadVtk{"vtu_too_few_types", "m.vtu", vtu("0 1 2 3", ""), 11, "holds 0 values, expected 1"},
         BadVtk{"vtu_truncated", "m.vtu", vtu("0 1 2 3", "10").substr(0, 330), 9, "never closed"},
@@ -221,7 +244,7 @@ INSTANTIATE_TEST_SUITE_P(
                "format=\"ascii\">1 2</DataArray>\n</Points>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n",
                5, "holds 2 values"},
         // Found by tests/fuzz: a version too large for an int was converted to one.
-        BadVtk{"huge_version", "m.vtk", "# vtk DataFile Version 5e59\ntest\nBINARY\n", 3, "save the mesh as ASCII"},
+        BadVtk{"huge_version", "m.vtk", "# vtk DataFile Version 5e59\ntest\nCOMPRESSED\n", 3, "ASCII or BINARY"},
         // A file ending in a newline ends on the (empty) line after its last one: 6 here, 7 below.
         BadVtk{"huge_lookup_table", "m.vtk", kLegacyHead + "LOOKUP_TABLE t 9223372036854775807\n", 6,
                "the file ends while reading the values of a data array"},

@@ -64,6 +64,15 @@ bool TextCursor::at_end() {
   return position_ >= text_.size();
 }
 
+std::optional<std::string_view> TextCursor::next_bytes(std::size_t count) {
+  if (count > text_.size() - position_) return std::nullopt;
+  const std::string_view bytes = text_.substr(position_, count);
+  line_ += static_cast<long>(std::count(bytes.begin(), bytes.end(), '\n'));  // as a text editor numbers them
+  position_ += count;
+  last_line_ = line_;
+  return bytes;
+}
+
 std::string TextCursor::where() const { return where(last_line_); }
 std::string TextCursor::where(long line) const { return fmt::format("{}:{}", label_, line); }
 

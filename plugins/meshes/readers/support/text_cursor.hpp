@@ -27,6 +27,8 @@ class TextCursor {
   [[noreturn]] void fail_at_end(std::string_view what);
   // Whether only whitespace is left.
   bool at_end();
+  // The next `count` bytes as they are (binary data inside a text file), or nothing when fewer are left.
+  std::optional<std::string_view> next_bytes(std::size_t count);
 
   // The line of the last line or token returned (the first line before anything was read).
   long line() const { return last_line_; }
