@@ -18,11 +18,14 @@
 #include "mtled/plugin.hpp"
 #include "support/mesh_file.hpp"
 #include "support/text_cursor.hpp"
+#include "gmsh_msh.hpp"
 
 namespace mtled {
 
 namespace {
 
+using msh::kTetType;
+using msh::volume_element_advice;
 using mesh_readers::MeshFileText;
 using mesh_readers::TextCursor;
 
@@ -107,22 +110,6 @@ std::optional<GmshElementType> gmsh_element_type(long long type) {
   }
 }
 
-constexpr long long kTetType = 4;
-
-std::string volume_element_advice(long long type) {
-  const auto info = gmsh_element_type(type);
-  const std::string name = info ? info->name : "volume element";
-  if (type == 11 || type == 29 || type == 30 || type == 31)
-    return fmt::format(
-        "element type {} ({}): mtled needs linear 4-node tets (type 4); mesh with `gmsh -3 -order 1` "
-        "(Mesh.ElementOrder = 1) and save again",
-        type, name);
-  return fmt::format(
-      "element type {} ({}): mtled needs a tet-only mesh (4-node tets, type 4); remove the "
-      "Recombine / Transfinite settings that make hexahedra, prisms or pyramids and mesh with `gmsh -3`",
-      type, name);
-}
-
 // Where a section's data lines are read from, for messages about a section that ends too soon.
 struct SectionProgress {
   std::string_view section;  // "Nodes"
@@ -191,8 +178,8 @@ class MshParser {
       const std::string found = first ? mesh_readers::quote_token(mesh_readers::trim(*first)) : std::string("nothing");
       if (first && (mesh_readers::trim(*first) == "$NOD" || mesh_readers::trim(*first) == "$NOE"))
         cursor_.fail(
-            "this is an MSH 1 file, which mtled does not read: save it as MSH 4.1 "
-            "(`gmsh mesh.msh -save -format msh41 -o mesh41.msh`)");
+            "this is an MSH 1 file, which mtled's parser does not read: set \"reader\": \"gmsh\" to read it with "
+            "Gmsh's, or save it as MSH 4.1 (`gmsh mesh.msh -save -format msh41 -o mesh41.msh`)");
       cursor_.fail(fmt::format("expected $MeshFormat on the first line of a Gmsh .msh file, found {}", found));
     }
     const auto line = cursor_.next_line();
@@ -210,7 +197,9 @@ class MshParser {
       version_ = 2;
     } else if (version == "4" || version == "4.0") {
       cursor_.fail(
-          fmt::format("MSH version 4.0 is not read (its layout differs from 4.1): convert the file with {}", kConvert));
+          fmt::format("MSH version 4.0 is not read by mtled's parser (its layout differs from 4.1): set \"reader\": "
+                      "\"gmsh\" to read it with Gmsh's, or convert the file with {}",
+                      kConvert));
     } else {
       cursor_.fail(
           fmt::format("MSH version {} is not read: mtled reads ASCII MSH 2.2 and 4.1; convert the file with {}",
@@ -218,8 +207,8 @@ class MshParser {
     }
     if (file_type != 0)
       cursor_.fail(
-          fmt::format("this is a binary .msh file: mtled reads ASCII .msh files; convert it with {} "
-                      "(ASCII is the default; or mesh with Mesh.Binary = 0)",
+          fmt::format("this is a binary .msh file, which only Gmsh's reader reads and this mtled was built without "
+                      "Gmsh; convert it with {} (ASCII is the default; or mesh with Mesh.Binary = 0)",
                       kConvert));
     expect_end("MeshFormat", cursor_.line() - 1);
   }
@@ -469,34 +458,8 @@ class MshParser {
       throw InputError(cursor_.label(),
                        "the file has no 4-node tetrahedra (element type 4): mtled needs a volume "
                        "mesh; mesh the volumes with `gmsh -3` and save again");
-    // Regions: physical volume groups by ascending tag, then "unassigned" for tets in none.
-    std::set<long long> tags(tet_physical_.begin(), tet_physical_.end());
-    const bool unassigned = tags.erase(0) > 0;
-    if (!tags.empty()) {
-      std::map<long long, Index> region_of_tag;
-      for (long long tag : tags) {
-        region_of_tag[tag] = static_cast<Index>(mesh_.region_names.size());
-        mesh_.region_names.push_back(group_name(3, tag));
-      }
-      const auto unassigned_region = static_cast<Index>(mesh_.region_names.size());
-      std::size_t unassigned_count = 0;
-      mesh_.tet_region.resize(mesh_.tets.size());
-      for (std::size_t t = 0; t < mesh_.tets.size(); ++t) {
-        if (tet_physical_[t] == 0) {
-          mesh_.tet_region[t] = unassigned_region;
-          ++unassigned_count;
-        } else {
-          mesh_.tet_region[t] = region_of_tag[tet_physical_[t]];
-        }
-      }
-      if (unassigned) {
-        mesh_.region_names.push_back("unassigned");
-        log().warn(
-            "{}: {} of {} tets belong to no physical volume; they form the region \"unassigned\" (add their "
-            "volumes to a Physical Volume to name it)",
-            cursor_.label(), unassigned_count, mesh_.tets.size());
-      }
-    }
+    msh::assign_physical_regions(mesh_, tet_physical_, [this](long long tag) { return group_name(3, tag); },
+                                 cursor_.label());
     for (auto& [key, nodes] : group_nodes_) {
       auto& set = mesh_.node_sets[group_name(key.first, key.second)];
       set.insert(set.end(), nodes.begin(), nodes.end());
@@ -652,16 +615,81 @@ class MshParser {
 
 }  // namespace
 
+namespace msh {
+
+std::string volume_element_advice(long long type) {
+  const auto info = gmsh_element_type(type);
+  const std::string name = info ? info->name : "volume element";
+  if (type == 11 || type == 29 || type == 30 || type == 31)
+    return fmt::format(
+        "element type {} ({}): mtled needs linear 4-node tets (type 4); mesh with `gmsh -3 -order 1` "
+        "(Mesh.ElementOrder = 1) and save again",
+        type, name);
+  return fmt::format(
+      "element type {} ({}): mtled needs a tet-only mesh (4-node tets, type 4); remove the "
+      "Recombine / Transfinite settings that make hexahedra, prisms or pyramids and mesh with `gmsh -3`",
+      type, name);
+}
+
+void assign_physical_regions(TetMesh& mesh, std::span<const long long> tet_physical,
+                             const std::function<std::string(long long)>& name_of, const std::string& label) {
+  std::set<long long> tags(tet_physical.begin(), tet_physical.end());
+  const bool unassigned = tags.erase(0) > 0;
+  if (tags.empty()) return;
+  std::map<long long, Index> region_of_tag;
+  for (long long tag : tags) {
+    region_of_tag[tag] = static_cast<Index>(mesh.region_names.size());
+    mesh.region_names.push_back(name_of(tag));
+  }
+  const auto unassigned_region = static_cast<Index>(mesh.region_names.size());
+  std::size_t unassigned_count = 0;
+  mesh.tet_region.resize(mesh.tets.size());
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t) {
+    if (tet_physical[t] == 0) {
+      mesh.tet_region[t] = unassigned_region;
+      ++unassigned_count;
+    } else {
+      mesh.tet_region[t] = region_of_tag[tet_physical[t]];
+    }
+  }
+  if (unassigned) {
+    mesh.region_names.push_back("unassigned");
+    log().warn(
+        "{}: {} of {} tets belong to no physical volume; they form the region \"unassigned\" (add their "
+        "volumes to a Physical Volume to name it)",
+        label, unassigned_count, mesh.tets.size());
+  }
+}
+
+bool is_binary(std::string_view text) {
+  const auto at = text.find("$MeshFormat");
+  if (at == std::string_view::npos) return false;
+  const auto line_start = text.find('\n', at);
+  if (line_start == std::string_view::npos) return false;
+  std::vector<std::string_view> fields;
+  mesh_readers::split_whitespace(text.substr(line_start + 1, text.find('\n', line_start + 1) - line_start - 1), fields);
+  return fields.size() >= 2 && fields[1] == "1";
+}
+
+}  // namespace msh
+
 class GmshFileReader final : public MeshSource {
  public:
   static void declare(ComponentDeclaration& d) {
     d.summary(
-        "Reads a Gmsh .msh file (ASCII MSH 2.2 or 4.1) of 4-node tets. Physical volumes become regions (named "
+        "Reads a Gmsh .msh file of 4-node tets: ASCII MSH 2.2 and 4.1 with mtled's own parser (every complaint "
+        "names the file and line), binary ones (Gmsh's -bin) and other versions through Gmsh's own reader. "
+        "Physical volumes become regions (named "
         "by $PhysicalNames, else by their number; \"all\" when there are none; tets in no physical volume form "
         "\"unassigned\"); physical surfaces, curves and points become node sets holding the nodes of their "
         "elements. The example reads the fixture tests/data/meshes/cube_gmsh41.msh (a path from the source "
         "tree's root).");
-    mesh_readers::declare_file_parameters(d, "Gmsh .msh, ASCII, version 2.2 or 4.1");
+    mesh_readers::declare_file_parameters(d, "Gmsh .msh, ASCII or binary");
+    d.string("reader")
+        .defaults("auto")
+        .choices({"auto", "gmsh"})
+        .doc("\"auto\": ASCII MSH 2.2 and 4.1 through mtled's parser, binary files through Gmsh's reader (libgmsh); "
+             "\"gmsh\": every file through Gmsh's reader (MSH 1, 2.x, 4.0, 4.1), whose messages name no line");
     d.example({{"path", "tests/data/meshes/cube_gmsh41.msh"}, {"scale", 1.0}});
   }
 
@@ -669,12 +697,33 @@ class GmshFileReader final : public MeshSource {
 
   TetMesh load(const MeshContext& context) override {
     const auto file = mesh_readers::read_mesh_file(parameters_, context);
-    TetMesh mesh = MshParser(file).parse();
+    TetMesh mesh = through_gmsh(file) ? read_with_gmsh(file) : MshParser(file).parse();
     mesh_readers::finish_mesh(mesh, parameters_.number("scale"), file.label);
     return mesh;
   }
 
  private:
+  bool through_gmsh(const MeshFileText& file) const {
+    return parameters_.string("reader") == "gmsh" || (kWithGmsh && msh::is_binary(file.text));
+  }
+
+  TetMesh read_with_gmsh(const MeshFileText& file) const {
+#ifdef MTLED_WITH_GMSH
+    return msh::read_with_gmsh(file);
+#else
+    throw InputError(parameters_.pointer("reader"),
+                     fmt::format("{}: this mtled was built without Gmsh (MTLED_WITH_GMSH=OFF), so only ASCII MSH 2.2 "
+                                 "and 4.1 files are read; convert the file with `gmsh mesh.msh -save -format msh41 -o "
+                                 "mesh41.msh`",
+                                 file.label));
+#endif
+  }
+
+#ifdef MTLED_WITH_GMSH
+  static constexpr bool kWithGmsh = true;
+#else
+  static constexpr bool kWithGmsh = false;
+#endif
   Parameters parameters_;
 };
 

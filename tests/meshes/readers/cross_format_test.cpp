@@ -1,5 +1,8 @@
 // The same cube in every format gives the same mesh, and every reader's output passes the kernel's
 // remove_unused_nodes and check_mesh, as a scene run does with it.
+#include <fstream>
+#include <iterator>
+
 #include "reader_test_support.hpp"
 
 namespace mtled::test {
@@ -15,6 +18,9 @@ std::vector<Reading> cube_readings() {
   const std::map<std::string, std::string> numbered = {{"1", "left"}, {"2", "right"}};
   return {{"gmsh_file", {{"path", "cube_msh22.msh"}}, {}},
           {"gmsh_file", {{"path", "cube_msh41.msh"}}, {}},
+          // Re-saved binary by Gmsh 4.8 (`-save -bin`): read through Gmsh's own reader.
+          {"gmsh_file", {{"path", "cube_msh22_bin.msh"}}, {}},
+          {"gmsh_file", {{"path", "cube_msh41_bin.msh"}}, {}},
           {"vtk_file", {{"path", "cube.vtk"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
           {"vtk_file", {{"path", "cube_appended.vtu"}, {"node_set_arrays", {"bottom", "top"}}}, numbered},
           // Written by VTK 9.1 itself, meshio 5.0 and as 3D Slicer saves models (see tests/data/meshes/README.md).
@@ -70,6 +76,46 @@ TEST(CrossFormat, EveryReadersMeshPassesCheckMesh) {
     ASSERT_NO_THROW(check_mesh(mesh, true)) << reader << " " << block.dump();
     EXPECT_NEAR(total_volume(mesh), 1.0, 1e-12) << reader << " " << block.dump();
   }
+}
+
+TEST(CrossFormat, BinaryGmshFilesGiveTheMeshOfTheAsciiOnes) {
+  // One geometry meshed by Gmsh 4.8 and saved four ways: binary files go through Gmsh's reader, ASCII ones
+  // through mtled's parser. ASCII .msh holds 16 significant digits, binary the doubles: equal to 1e-15 m here.
+  const double quantum = 1e-12;
+  const CanonicalMesh ascii = canonical(read_mesh("gmsh_file", {{"path", "cube_gmsh41.msh"}}), {}, quantum);
+  EXPECT_EQ(ascii.regions.size(), 2u);
+  EXPECT_EQ(ascii.node_sets.size(), 2u);
+  for (const std::string file : {"cube_gmsh22.msh", "cube_gmsh22_bin.msh", "cube_gmsh41_bin.msh"})
+    EXPECT_EQ(canonical(read_mesh("gmsh_file", {{"path", file}}), {}, quantum), ascii) << file;
+}
+
+TEST(CrossFormat, MtledsMshParserAgreesWithGmshsOwnReader) {
+  // Gmsh's reader as the independent reference for mtled's: the same nodes, tets, regions and node sets.
+  for (const std::string file :
+       {"cube_msh22.msh", "cube_msh41.msh", "cube_gmsh22.msh", "cube_gmsh41.msh", "cube_gmsh41_all.msh"})
+    EXPECT_EQ(canonical(read_mesh("gmsh_file", {{"path", file}})),
+              canonical(read_mesh("gmsh_file", {{"path", file}, {"reader", "gmsh"}})))
+        << file;
+}
+
+TEST(CrossFormat, DamagedBinaryGmshFilesAreRefusedByName) {
+  const auto dir = scratch_dir("cross_format/damaged_binary");
+  std::ifstream in(fixtures() / "cube_gmsh41_bin.msh", std::ios::binary);
+  const std::string whole((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  write_text(dir / "cut.msh", whole.substr(0, whole.size() / 2));
+  write_text(dir / "header_only.msh", "$MeshFormat\n4.1 1 8\n");
+  for (const std::string file : {"cut.msh", "header_only.msh"}) {
+    const InputError error = read_error("gmsh_file", {{"path", file}}, dir);
+    EXPECT_EQ(where_of(error), (dir / file).string());
+    EXPECT_NE(message_of(error).find("Gmsh could not read the file"), std::string::npos) << message_of(error);
+  }
+  // A few bytes changed: Gmsh 4.8.4's reader dies of a segmentation fault on it. It runs in a child process,
+  // so the crash is an input error here, and this test process lives on.
+  const InputError error = read_error("gmsh_file", {{"path", "cube_gmsh41_bin_damaged.msh"}});
+  const std::string message = message_of(error);
+  EXPECT_TRUE(message.find("Gmsh's reader crashed on the file") != std::string::npos ||
+              message.find("Gmsh could not read the file") != std::string::npos)
+      << message;
 }
 
 TEST(CrossFormat, EmptyAndMissingFilesInEveryReader) {

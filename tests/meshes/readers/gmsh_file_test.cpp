@@ -125,7 +125,6 @@ const std::string kHeader = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
 INSTANTIATE_TEST_SUITE_P(
     Cases, GmshFileErrors,
     ::testing::Values(
-        BadMsh{"binary", "$MeshFormat\n4.1 1 8\n", 2, "binary .msh file"},
         BadMsh{"version40", "$MeshFormat\n4 0 8\n$EndMeshFormat\n", 2, "-format msh41"},
         BadMsh{"version3", "$MeshFormat\n3.0 0 8\n$EndMeshFormat\n", 2, "mtled reads ASCII MSH 2.2 and 4.1"},
         BadMsh{"msh1", "$NOD\n1\n1 0 0 0\n$ENDNOD\n", 1, "MSH 1"},
