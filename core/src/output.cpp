@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <limits>
 #include <sstream>
+#include <string_view>
 
 #include "mtled/errors.hpp"
 
@@ -106,8 +107,24 @@ std::vector<unsigned char> raw_bytes(const VtuArray& array) {
   return bytes;
 }
 
+std::string base64(std::string_view bytes) {
+  static constexpr char kDigits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::size_t n = std::min<std::size_t>(3, bytes.size() - i);
+    std::uint32_t group = 0;
+    for (std::size_t k = 0; k < 3; ++k)
+      group = (group << 8) | (k < n ? static_cast<unsigned char>(bytes[i + k]) : 0u);
+    for (std::size_t k = 0; k < 4; ++k) out += k <= n ? kDigits[(group >> (18 - 6 * k)) & 63] : '=';
+  }
+  return out;
+}
+
 // VTK's zlib layout: a UInt64 header [number of blocks, block size, size of the last block (0 when full),
-// compressed size of each block], then the blocks, each a zlib stream of up to 32 KiB of the data.
+// compressed size of each block], then the blocks, each a zlib stream of up to 32 KiB of the data. Header
+// and blocks base64-encoded each on its own, as VTK's writer does: raw bytes are smaller by a quarter, but
+// an XML parser may take them for text (meshio 5 then fails to read the file).
 std::string zlib_blocks(const std::vector<unsigned char>& data) {
   constexpr std::size_t kBlock = 32768;
   const std::size_t blocks = (data.size() + kBlock - 1) / kBlock;
@@ -123,8 +140,8 @@ std::string zlib_blocks(const std::vector<unsigned char>& data) {
     header.push_back(length);
     compressed.append(block.data(), length);
   }
-  std::string out(reinterpret_cast<const char*>(header.data()), header.size() * sizeof(std::uint64_t));
-  return out + compressed;
+  return base64({reinterpret_cast<const char*>(header.data()), header.size() * sizeof(std::uint64_t)}) +
+         base64(compressed);
 }
 
 std::string data_array_tag(const VtuArray& array, const std::string& format_attributes) {
@@ -200,7 +217,7 @@ void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> d
   }
   out << "</Cells>\n</Piece>\n</UnstructuredGrid>\n";
   if (binary) {
-    out << "<AppendedData encoding=\"raw\">\n_";
+    out << "<AppendedData encoding=\"base64\">\n_";
     for (const auto& block : appended) out.write(block.data(), static_cast<std::streamsize>(block.size()));
     out << "\n</AppendedData>\n";
   }

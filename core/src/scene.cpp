@@ -337,8 +337,8 @@ const ComponentDeclaration& output_declaration() {
     d.string("vtu_format")
         .defaults("binary")
         .choices({"binary", "ascii"})
-        .doc("how result.vtu and steps/*.vtu store their arrays: \"binary\" (zlib-compressed, appended raw, as VTK "
-             "and ParaView write them) or \"ascii\" (text, about three times larger); both exact");
+        .doc("how result.vtu and steps/*.vtu store their arrays: \"binary\" (zlib-compressed, appended in base64, as "
+             "VTK writes them) or \"ascii\" (text, about three times larger); both exact");
     return d;
   }();
   return declaration;

@@ -50,8 +50,8 @@ struct CellField {
   std::vector<double> values;
 };
 
-// How result files store their arrays: binary, zlib-compressed and appended raw (VTK's and ParaView's
-// default, about a third of the text's size), or ASCII text with full precision.
+// How result files store their arrays: binary, zlib-compressed and appended in base64 (VTK's default, about
+// a third of the text's size), or ASCII text with full precision.
 enum class VtuFormat { binary, ascii };
 
 // An unstructured-grid VTK XML file readable by ParaView, VTK, meshio and 3D Slicer: the reference mesh
