@@ -68,8 +68,7 @@ void write_plot(const OutputFolder& out, const Study& study, const std::vector<R
   const std::string title = study.description.empty() ? fmt::format("Error against wall time: {}", study.file.filename().string())
                                                       : study.description;
   out.write_file("error_vs_time.svg", [&](std::ostream& o) {
-    svg::write_loglog_plot(o, points, title.size() > 110 ? title.substr(0, 107) + "..." : title,
-                           "wall time of the run (s)", study.metric.describe, notes);
+    svg::write_loglog_plot(o, points, title, "wall time of the run (s)", study.metric.describe, notes);
   });
 
 }
