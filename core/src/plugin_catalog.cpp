@@ -6,7 +6,10 @@
 #include <fmt/ranges.h>
 
 #include <boost/dll/shared_library.hpp>
+#include <algorithm>
 #include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
 
@@ -51,6 +54,17 @@ fs::path executable_directory() {
   return ec ? fs::current_path() : self.parent_path();
 }
 
+namespace {
+bool same_contents(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::equivalent(a, b, ec)) return true;
+  if (fs::file_size(a, ec) != fs::file_size(b, ec) || ec) return false;
+  std::ifstream in_a(a, std::ios::binary), in_b(b, std::ios::binary);
+  return std::equal(std::istreambuf_iterator<char>(in_a), std::istreambuf_iterator<char>(),
+                    std::istreambuf_iterator<char>(in_b), std::istreambuf_iterator<char>());
+}
+}  // namespace
+
 std::vector<fs::path> plugin_search_path(const std::vector<fs::path>& command_line, const std::vector<fs::path>& scene) {
   std::vector<fs::path> path = command_line;
   path.insert(path.end(), scene.begin(), scene.end());
@@ -85,6 +99,12 @@ PluginCatalog::PluginCatalog(std::vector<fs::path> search_path) : search_path_(s
       const auto parsed = parse_file_name(file.filename().string());
       if (!parsed) continue;
       const Available* earlier = find(parsed->first, parsed->second);
+      if (earlier != nullptr && same_contents(earlier->file, file)) {
+        // The same library reached twice (the build folder on the command line and a copy beside the
+        // scene): not ambiguous, the first in search order is used.
+        log().debug("{} is a copy of {}; the first is used", file.string(), earlier->file.string());
+        continue;
+      }
       if (earlier != nullptr) {
         duplicates_.push_back(
             {std::string(to_string(parsed->first)) + " " + parsed->second,

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <fstream>
 
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/version.hpp"
@@ -50,11 +51,25 @@ TEST(PluginCatalog, RefusesAnotherBuildFingerprintAndSaysWhatDiffers) {
 }
 
 TEST(PluginCatalog, DuplicateComponentNamesBothFiles) {
-  PluginCatalog catalog({kBad / "good", kBad / "copy"});
+  // Another build of the same component (here: the library with bytes appended, so its contents differ).
+  const auto other = test::scratch_dir("plugin_catalog/other_build");
+  fs::copy_file(kBad / "good" / "mtled-material-good_test_material.so", other / "mtled-material-good_test_material.so");
+  std::ofstream(other / "mtled-material-good_test_material.so", std::ios::app | std::ios::binary) << "another build";
+  PluginCatalog catalog({kBad / "good", other});
   ASSERT_EQ(catalog.duplicates().size(), 1u);
   const std::string message = load_error(catalog, "good_test_material");
   EXPECT_NE(message.find((kBad / "good").string()), std::string::npos) << message;
-  EXPECT_NE(message.find((kBad / "copy").string()), std::string::npos) << message;
+  EXPECT_NE(message.find(other.string()), std::string::npos) << message;
+}
+
+TEST(PluginCatalog, AnIdenticalCopyInASecondFolderIsNoDuplicate) {
+  // A plugin's build folder on the command line and a copy of the library beside the scene: one plugin.
+  const auto copy = test::scratch_dir("plugin_catalog/identical_copy");
+  fs::copy_file(kBad / "good" / "mtled-material-good_test_material.so", copy / "mtled-material-good_test_material.so");
+  PluginCatalog catalog({kBad / "good", copy});
+  EXPECT_TRUE(catalog.duplicates().empty());
+  EXPECT_NO_THROW(catalog.load(Category::material, "good_test_material"));
+  EXPECT_EQ(catalog.loaded_files(), std::vector<std::string>{"mtled-material-good_test_material.so"});
 }
 
 TEST(PluginCatalog, UnknownComponentSuggestsTheClosestAndListsFolders) {

@@ -1,9 +1,5 @@
 // A minimal linear material used only to exercise the plugin loader (built several times with different
 // compile definitions by tests/core/CMakeLists.txt).
-#ifdef MTLED_PLUGIN_NAME_OVERRIDE
-#undef MTLED_PLUGIN_NAME
-#define MTLED_PLUGIN_NAME MTLED_PLUGIN_NAME_OVERRIDE
-#endif
 #include <stdexcept>
 
 #include "mtled/plugin.hpp"
