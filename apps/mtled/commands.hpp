@@ -36,6 +36,11 @@ struct StudyOptions {
   std::string log_level = "info";  // passed to every run
 };
 
+struct ConformanceOptions {
+  std::filesystem::path library;              // a plugin library (mtled-CATEGORY-NAME.so) or a folder of them
+  std::vector<std::string> gtest_arguments;   // passed on to the runner (--gtest_brief=1, ...)
+};
+
 // Each returns the process exit code (0 ok, 2 invalid input, 3 instability, 1 anything else); InputError
 // and other exceptions propagate to main, which prints them and picks the code.
 int run_scene(const RunOptions& options);
@@ -45,5 +50,7 @@ int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as
 int print_schema(const std::vector<std::filesystem::path>& plugin_paths);
 int compare_command(const CompareOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
 int study_command(const StudyOptions& options);
+// Replaces the process by the conformance runner (its exit code: 0 when every suite passed).
+int conformance_command(const ConformanceOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
 
 }  // namespace mtled::app

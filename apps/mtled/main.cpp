@@ -22,8 +22,9 @@ struct Commands {
   std::string describe;
   mtled::app::CompareOptions compare;
   mtled::app::StudyOptions study;
+  mtled::app::ConformanceOptions conformance;
   CLI::App *run_cmd = nullptr, *validate_cmd = nullptr, *plugins_cmd = nullptr, *schema_cmd = nullptr,
-           *compare_cmd = nullptr, *study_cmd = nullptr;
+           *compare_cmd = nullptr, *study_cmd = nullptr, *conformance_cmd = nullptr;
 };
 
 void add_global_options(CLI::App& cli, Commands& c) {
@@ -54,6 +55,13 @@ void add_scene_commands(CLI::App& cli, Commands& c) {
   c.plugins_cmd->add_option("--describe", c.describe, "one component's parameters (NAME or CATEGORY/NAME)");
 
   c.schema_cmd = cli.add_subcommand("schema", "print the JSON Schema of scenes (for editors)");
+
+  c.conformance_cmd = cli.add_subcommand(
+      "conformance", "run mtled's conformance suites on a plugin library (materials, shape functions, integrators)");
+  c.conformance_cmd->add_option("library", c.conformance.library, "mtled-CATEGORY-NAME.so, or a folder of them")
+      ->required();
+  c.conformance_cmd->add_option("--gtest", c.conformance.gtest_arguments,
+                                "an argument for the GoogleTest runner, such as --gtest=--gtest_brief=1 (repeatable)");
 }
 
 void add_analysis_commands(CLI::App& cli, Commands& c) {
@@ -85,6 +93,7 @@ int dispatch(Commands& c) {
   if (*c.schema_cmd) return app::print_schema(c.plugin_paths);
   if (*c.compare_cmd) return app::compare_command(c.compare, c.plugin_paths);
   if (*c.study_cmd) return app::study_command(c.study);
+  if (*c.conformance_cmd) return app::conformance_command(c.conformance, c.plugin_paths);
   return 1;
 }
 

@@ -18,7 +18,7 @@
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
-#include "needle_geometry.hpp"
+#include "mtled/needle/needle_geometry.hpp"
 
 namespace mtled {
 

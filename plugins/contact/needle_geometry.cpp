@@ -1,4 +1,4 @@
-#include "needle_geometry.hpp"
+#include "mtled/needle/needle_geometry.hpp"
 
 #include <fmt/format.h>
 

@@ -39,7 +39,7 @@
 
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
-#include "needle_geometry.hpp"
+#include "mtled/needle/needle_geometry.hpp"
 
 namespace mtled {
 
