@@ -155,13 +155,14 @@ void FirstPiola(const StressBatch& batch, const double* weights, double (&P)[9][
   }
 }
 
-void Scatter(const GradientRows& rows, const double* xi4, Index first, int count,
+void Scatter(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
              const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
   const D d;
   for (int p = 0; p < count; ++p) {
     if (skip[p]) continue;
-    V stress[9];
+    V stress[9], mean[3];
     for (int c = 0; c < 9; ++c) stress[c] = hn::Set(d, P[c][p]);
+    for (int k = 0; k < 3; ++k) mean[k] = hn::Set(d, m3[3 * static_cast<std::size_t>(first + p) + k]);
     const RowBlocks row = row_blocks(rows, first + p);
     const double* g = row.gradients;
     const Index* records = row.records;
@@ -169,7 +170,7 @@ void Scatter(const GradientRows& rows, const double* xi4, Index first, int count
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
         V grad[3];
         load_records(d, xi4, records + j, grad[0], grad[1], grad[2]);
-        for (int k = 0; k < 3; ++k) grad[k] = hn::Add(hn::Load(d, g + k * kBlock + j), grad[k]);
+        for (int k = 0; k < 3; ++k) grad[k] = hn::Add(hn::Load(d, g + k * kBlock + j), hn::Sub(grad[k], mean[k]));
         V force[3];
         for (int i = 0; i < 3; ++i)
           force[i] = hn::MulAdd(stress[3 * i + 2], grad[2],
@@ -195,9 +196,9 @@ void gather(const GradientRows& rows, const double* u4, Index first, Index prefe
 void first_piola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]) {
   HWY_DYNAMIC_DISPATCH(FirstPiola)(batch, weights, P);
 }
-void scatter(const GradientRows& rows, const double* xi4, Index first, int count,
+void scatter(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
              const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
-  HWY_DYNAMIC_DISPATCH(Scatter)(rows, xi4, first, count, P, skip, f4);
+  HWY_DYNAMIC_DISPATCH(Scatter)(rows, xi4, m3, first, count, P, skip, f4);
 }
 }  // namespace mtled::force_kernel
 #endif

@@ -5,9 +5,9 @@
 //   gather:        F = I + sum_I u_I (x) grad N_I          (one SIMD lane per support entry)
 //   the material:  S(F) for the batch                      (Material::stress_batch, one lane per point)
 //   first_piola:   P = w F S                               (one lane per point)
-//   scatter:       f_I += P (grad N_I + xi_I)              (one lane per support entry)
+//   scatter:       f_I += P (grad N_I + xi_I - m_p)        (one lane per support entry)
 // The per-node arrays u4, xi4 and f4 hold 4 doubles per node (x, y, z, 0) and a zero padding node at the end
-// (GradientRows). Every lane of a batch past its count is filled with F = I.
+// (GradientRows); m3 holds 3 doubles per integration point (the mean of its support's xi). Every lane of a batch past its count is filled with F = I.
 #include "mtled/interfaces/material.hpp"
 #include "mtled/model.hpp"
 
@@ -18,9 +18,9 @@ namespace mtled::force_kernel {
 void gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch);
 // P[c][p] = w_p (F S)_c of lane p (c = 3 i + j), for every lane.
 void first_piola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]);
-// f4 += P (grad N + xi) over the rows of integration points first .. first + count - 1, lane p of P for point
-// first + p; lanes with skip[p] set are left out.
-void scatter(const GradientRows& rows, const double* xi4, Index first, int count,
+// f4 += P (grad N + xi - m) over the rows of integration points first .. first + count - 1, lane p of P for
+// point first + p; lanes with skip[p] set are left out.
+void scatter(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
              const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4);
 
 }  // namespace mtled::force_kernel

@@ -90,6 +90,7 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   build_time_steps();
   const std::size_t padded = 4 * (static_cast<std::size_t>(node_count()) + 1);
   xi_.assign(padded, 0.0);
+  xi_mean_.assign(3 * static_cast<std::size_t>(integration_point_count()), 0.0);
   if (options.consistent_integration) build_integration_correction();
   if (options.nodal_volumetric_averaging) build_volumetric_averaging();
   padded_u_.assign(padded, 0.0);
@@ -273,22 +274,101 @@ void Model::build_integration_correction() {
     const Vec3 share = (mesh_.points[f[1]] - a).cross(mesh_.points[f[2]] - a) / 6.0;  // area / 3, outward
     for (Index v : f) area[v] += share;
   }
+  // r_I = b_I - sum_ip w grad N_I: what the corrections must add to node I's gradient integral.
   std::vector<Vec3> residual(static_cast<std::size_t>(node_count()), Vec3::Zero());
-  std::vector<double> weight(static_cast<std::size_t>(node_count()), 0.0);
   for (Index k = 0; k < node_count(); ++k) {
     if (area[k].squaredNorm() == 0.0) continue;  // interior node
     for (std::int64_t e = node_rows_.offsets[k]; e < node_rows_.offsets[k + 1]; ++e)
       residual[node_rows_.nodes[e]] += node_rows_.values[e] * area[k];
   }
-  for (Index ip = 0; ip < integration_point_count(); ++ip) {
-    for (int k = 0; k < ip_rows_.size(ip); ++k) {
-      const Index node = ip_rows_.node(ip, k);
-      residual[node] -= ip_weight_[ip] * ip_rows_.gradient(ip, k);
-      weight[node] += ip_weight_[ip];
-    }
-  }
+  for (Index ip = 0; ip < integration_point_count(); ++ip)
+    for (int k = 0; k < ip_rows_.size(ip); ++k) residual[ip_rows_.node(ip, k)] -= ip_weight_[ip] * ip_rows_.gradient(ip, k);
+  const std::vector<Vec3> xi = solve_integration_correction(residual);
   for (Index i = 0; i < node_count(); ++i)
-    for (int d = 0; d < 3; ++d) xi_[4 * static_cast<std::size_t>(i) + d] = residual[i][d] / weight[i];
+    for (int d = 0; d < 3; ++d) xi_[4 * static_cast<std::size_t>(i) + d] = xi[i][d];
+  for (Index ip = 0; ip < integration_point_count(); ++ip) {
+    Vec3 mean = Vec3::Zero();
+    for (int k = 0; k < ip_rows_.size(ip); ++k) mean += xi[ip_rows_.node(ip, k)];
+    mean /= ip_rows_.size(ip);
+    for (int d = 0; d < 3; ++d) xi_mean_[3 * static_cast<std::size_t>(ip) + d] = mean[d];
+  }
+}
+
+// The corrections: with delta_I(p) = xi_I - mean_{J in p} xi_J, node I's constraint sum_p w_p delta_I(p) = r_I
+// reads (L xi)_I = W_I xi_I - sum_{p ni I} w_p mean_p(xi) = r_I, W_I = sum_{p ni I} w_p. L is symmetric positive
+// semi-definite (a weighted graph Laplacian of the supports: sum_J L_IJ = 0), its null space the constant
+// vectors, which change no delta; r sums to zero (sum_I grad N_I = 0 and sum_I b_I = closed-surface integral
+// of n = 0) up to round-off, which is removed. Solved by Jacobi-preconditioned conjugate gradients, matrix-free,
+// the three components together.
+std::vector<Vec3> Model::solve_integration_correction(std::vector<Vec3> r) const {
+  const Index n = node_count(), points = integration_point_count();
+  // Each node's integration points (the transpose of the rows), for the product in node order.
+  std::vector<std::int64_t> first(static_cast<std::size_t>(n) + 1, 0);
+  for (Index ip = 0; ip < points; ++ip)
+    for (int k = 0; k < ip_rows_.size(ip); ++k) ++first[static_cast<std::size_t>(ip_rows_.node(ip, k)) + 1];
+  for (Index i = 0; i < n; ++i) first[i + 1] += first[i];
+  std::vector<Index> node_points(static_cast<std::size_t>(first[n]));
+  {
+    std::vector<std::int64_t> next(first.begin(), first.end() - 1);
+    for (Index ip = 0; ip < points; ++ip)
+      for (int k = 0; k < ip_rows_.size(ip); ++k) node_points[next[ip_rows_.node(ip, k)]++] = ip;
+  }
+  std::vector<double> W(static_cast<std::size_t>(n), 0.0), diagonal(static_cast<std::size_t>(n), 0.0);
+  for (Index i = 0; i < n; ++i)
+    for (auto e = first[i]; e < first[i + 1]; ++e) {
+      const Index ip = node_points[e];
+      W[i] += ip_weight_[ip];
+      diagonal[i] += ip_weight_[ip] * (1.0 - 1.0 / ip_rows_.size(ip));
+    }
+  std::vector<Vec3> mean(static_cast<std::size_t>(points));
+  const auto apply = [&](const std::vector<Vec3>& x, std::vector<Vec3>& y) {
+#pragma omp parallel for schedule(static)
+    for (Index ip = 0; ip < points; ++ip) {
+      Vec3 sum = Vec3::Zero();
+      for (int k = 0; k < ip_rows_.size(ip); ++k) sum += x[ip_rows_.node(ip, k)];
+      mean[ip] = sum / ip_rows_.size(ip);
+    }
+#pragma omp parallel for schedule(static)
+    for (Index i = 0; i < n; ++i) {
+      Vec3 sum = Vec3::Zero();
+      for (auto e = first[i]; e < first[i + 1]; ++e) sum += ip_weight_[node_points[e]] * mean[node_points[e]];
+      y[i] = W[i] * x[i] - sum;
+    }
+  };
+  Vec3 drift = Vec3::Zero();
+  for (const Vec3& v : r) drift += v;
+  for (Vec3& v : r) v -= drift / n;
+  std::vector<Vec3> x(static_cast<std::size_t>(n), Vec3::Zero()), z(r.size()), p(r.size()), q(r.size());
+  const auto dot = [](const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+    Vec3 s = Vec3::Zero();
+    for (std::size_t i = 0; i < a.size(); ++i) s += a[i].cwiseProduct(b[i]);
+    return s;
+  };
+  const auto precondition = [&](const std::vector<Vec3>& from, std::vector<Vec3>& to) {
+    for (Index i = 0; i < n; ++i) to[i] = diagonal[i] > 0.0 ? Vec3(from[i] / diagonal[i]) : Vec3::Zero();
+  };
+  precondition(r, z);
+  p = z;
+  Vec3 rz = dot(r, z);
+  const Vec3 target = 1e-24 * dot(r, r).cwiseMax(Vec3::Constant(1e-300));  // |r| down by 1e12
+  int iteration = 0;
+  for (; iteration < 20000 && (dot(r, r).array() > target.array()).any(); ++iteration) {
+    apply(p, q);
+    const Vec3 pq = dot(p, q);
+    for (Index i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d)
+        if (pq[d] > 0.0) {
+          x[i][d] += rz[d] / pq[d] * p[i][d];
+          r[i][d] -= rz[d] / pq[d] * q[i][d];
+        }
+    precondition(r, z);
+    const Vec3 rz_next = dot(r, z);
+    for (Index i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) p[i][d] = z[i][d] + (rz[d] > 0.0 ? rz_next[d] / rz[d] : 0.0) * p[i][d];
+    rz = rz_next;
+  }
+  log().debug("consistent integration: corrections solved in {} conjugate-gradient iterations", iteration);
+  return x;
 }
 
 std::vector<double> Model::lumped_mass(std::span<const double> density_scale) const {
@@ -345,7 +425,7 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
       if (skip[p]) first_bad = std::min(first_bad, first + p);
     }
     force_kernel::first_piola(batch, weights, P);
-    force_kernel::scatter(ip_rows_, xi_.data(), first, count, P, skip, f4);
+    force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, f4);
   }
   return first_bad;
 }
@@ -508,7 +588,7 @@ Index Model::internal_forces_averaged(std::span<const double> u, std::span<doubl
         const Mat3 stress = a.local_stress[first + p] + (ip_weight_[first + p] * pressure) * a.cofactor[first + p];
         for (int c = 0; c < 9; ++c) P[c][p] = stress(c / 3, c % 3);
       }
-      force_kernel::scatter(ip_rows_, xi_.data(), first, count, P, skip, local.data());
+      force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, local.data());
     }
     team_->barrier();
     reduce_thread_forces(f, thread);
