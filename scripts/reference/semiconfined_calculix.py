@@ -7,7 +7,8 @@ The cylinder (30 mm across, 17 mm high) is a quadrilateral mesh of the disc extr
 element is a hexahedron; both faces are bonded to the platens (bottom fixed, top moved down, its x and y
 held), the side free. CalculiX's Ogden law with N = 1 is mtled's: W = (2 mu / alpha^2)(sum_i lambdabar_i^alpha
 - 3) + (1/D)(J - 1)^2 (lambdabar: the isochoric stretches). The top platen's total reaction is printed at 5,
-10, 15 and 20% compression, on each refinement (element sizes below), into a CSV.
+10, 15 and 20% compression, on each refinement (element sizes below), into a CSV. First it checks the setup on
+the homogeneous uniaxial case (one element, frictionless ends) against the closed form.
 
 Usage: semiconfined_calculix.py OUTPUT.csv [SIZE_MM ...] [--check]   (default sizes 3 2 1.5 mm; needs gmsh and ccx;
 --check asserts that the force grows with compression, ever faster)
@@ -107,10 +108,49 @@ def run(h):
         return len(nodes), len(elements), [-f for f in forces]
 
 
+# One 20-node hexahedron (CalculiX's node order: 8 corners, then the 12 edge midpoints) for the uniaxial check.
+CUBE_CORNERS = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+CUBE_EDGES = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4), (0, 4), (1, 5), (2, 6), (3, 7)]
+
+
+def uniaxial(side=0.01, stretch=0.8):
+    """Nominal stress of a cube compressed to `stretch` with frictionless ends (homogeneous), by CalculiX."""
+    points = [tuple(side * c for c in corner) for corner in CUBE_CORNERS]
+    points += [tuple((a + b) / 2 for a, b in zip(points[i], points[j])) for i, j in CUBE_EDGES]
+    with tempfile.TemporaryDirectory() as folder:
+        deck = os.path.join(folder, "uniaxial.inp")
+        with open(deck, "w") as f:
+            f.write("*NODE\n" + "".join(f"{i + 1}, {x}, {y}, {z}\n" for i, (x, y, z) in enumerate(points)))
+            ids = list(range(1, 21))
+            f.write("*ELEMENT, TYPE=C3D20R, ELSET=BODY\n1, " + ", ".join(map(str, ids[:15])) + ",\n"
+                    + ", ".join(map(str, ids[15:])) + "\n")
+            for name, axis, value in (("BOTTOM", 2, 0.0), ("TOP", 2, side), ("XZERO", 0, 0.0), ("YZERO", 1, 0.0)):
+                members = [str(i + 1) for i, p in enumerate(points) if abs(p[axis] - value) < 1e-12]
+                f.write(f"*NSET, NSET={name}\n" + ", ".join(members) + "\n")
+            f.write(f"*MATERIAL, NAME=SYLGARD\n*HYPERELASTIC, OGDEN, N=1\n{MU}, {ALPHA}, {D}\n")
+            f.write("*SOLID SECTION, ELSET=BODY, MATERIAL=SYLGARD\n")
+            f.write("*STEP, NLGEOM, INC=1000\n*STATIC\n0.05, 1.0, 1e-6, 0.1\n")
+            f.write(f"*BOUNDARY\nBOTTOM, 3, 3\nXZERO, 1, 1\nYZERO, 2, 2\nTOP, 3, 3, {-(1 - stretch) * side}\n")
+            f.write("*NODE PRINT, NSET=TOP, TOTALS=ONLY\nRF\n*END STEP\n")
+        subprocess.run(["ccx", "-i", deck[:-4]], cwd=folder, check=True, capture_output=True)
+        text = open(deck[:-4] + ".dat").read()
+        totals = re.findall(r"total force \(fx,fy,fz\) for set TOP and time\s+\S+\s*\n\s*\n?(.*)", text)
+        return float(totals[-1].split()[2]) / side ** 2
+
+
 def main():
     output = sys.argv[1]
     check = "--check" in sys.argv[2:]
     sizes = [float(s) for s in sys.argv[2:] if s != "--check"] or [3.0, 2.0, 1.5]
+    # The cross-check of the setup (element, Ogden parameters, reaction totals): the homogeneous uniaxial case
+    # against its closed form (scripts/uniaxial_exact.py; the scene uniaxial_cube_ogden.json's -649.5651 Pa).
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+    from uniaxial_exact import top_force
+    exact = top_force(MU, ALPHA, D, 0.8, 0.01) / 1e-4
+    calculix = uniaxial()
+    print(f"uniaxial cube at stretch 0.8: CalculiX {calculix:.7g} Pa, exact {exact:.7g} Pa, "
+          f"relative difference {abs(calculix / exact - 1):.1e}", flush=True)
+    assert abs(calculix / exact - 1) < 1e-6, (calculix, exact)
     rows = []
     for size in sizes:
         nodes, elements, forces = run(size * 1e-3)
