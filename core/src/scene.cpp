@@ -363,6 +363,20 @@ const ComponentDeclaration& monitors_declaration() {
         .unit("1")
         .doc("Lanczos vectors per re-estimate (each one internal-force evaluation and one vector of memory); each "
              "estimate starts from the previous one's Ritz vector; the first, from a random one, uses three times as many");
+    d.integer("inversion_every_steps")
+        .defaults(100)
+        .non_negative()
+        .unit("1")
+        .doc("move the background tets by the interpolated displacements at their vertices every this many steps and "
+             "after the last, and find those turned inside out: material folded between integration points, which no "
+             "point's J shows; 0 turns the check off");
+    d.string("inversion")
+        .defaults("warn")
+        .choices({"warn", "stop"})
+        .doc("what inverted background tets do: \"warn\" logs the first and records them in summary.json "
+             "(monitors.inversion); \"stop\" ends the run (status \"unstable\", what \"inverted_between_points\"). "
+             "The kinematic needle folds tets across its path near the entry (the tissue cannot be cut), so warn is "
+             "the default");
     return d;
   }();
   return declaration;

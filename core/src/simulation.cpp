@@ -8,6 +8,7 @@
 
 #include "monitors/energy_monitor.hpp"
 #include "monitors/instability.hpp"
+#include "monitors/inversion_monitor.hpp"
 #include "monitors/stable_step_monitor.hpp"
 #include "mtled/log.hpp"
 
@@ -164,6 +165,8 @@ void Simulation::build_monitors(const Scene& scene) {
     monitors_.push_back(std::make_unique<StableStepMonitor>(
         every, static_cast<int>(scene.monitors.integer("stable_step_iterations")), 1e-7 * model_->length_scale()));
   }
+  if (const long every = scene.monitors.integer("inversion_every_steps"); every > 0)
+    monitors_.push_back(std::make_unique<InversionMonitor>(every, scene.monitors.string("inversion") == "stop"));
 }
 
 Simulation::~Simulation() = default;
@@ -281,6 +284,10 @@ void Simulation::run(StepObserver* observer) {
     const StepRecord step = last_step();
     for (const auto& monitor : monitors_) monitor->after_step(step);
     if (observer != nullptr) observer->on_step(*this);
+  }
+  if (load_.step > 0) {
+    const StepRecord last = last_step();
+    for (const auto& monitor : monitors_) monitor->after_run(last);
   }
 }
 

@@ -258,6 +258,48 @@ TEST(Cli, RelaxationThatRunsOutOfStepsIsReportedNotWritten) {
         "did not reach the steady state in 120 steps");
 }
 
+// A boundary condition that pushes the three nodes at the top's centre 6 mm into the 10 mm cube: every
+// integration point's J stays positive (the run used to end "ok"), but the background tets around the nodes
+// turn inside out. With /monitors/inversion = "stop" the run ends unstable naming where; by default it warns
+// and records the folded tets in summary.json. The plain compression folds nothing.
+TEST(Cli, MaterialFoldedBetweenIntegrationPointsIsReported) {
+  const auto pushed = [](const std::string& action) {
+    return variant("fold-" + action, [&](json& s) {
+      s["boundaries"] = json::array(
+          {{{"type", "fixed"}, {"name", "bottom"}, {"nodes", {{"group", "z0"}}}},
+           {{"type", "prescribed_displacement"},
+            {"name", "pushed"},
+            {"nodes", {{"sphere", {{"center", {0.005, 0.005, 0.01}}, {"radius", 0.0012}}}}},
+            {"displacement", {0, 0, -0.006}}}});
+      s["integrator"] = {{"type", "dynamic_relaxation"}, {"load_steps", 300}, {"tolerance", 1e-5}};
+      s["monitors"] = {{"inversion", action}};
+    });
+  };
+  auto file = pushed("stop");
+  auto result = test::run_mtled({"run", file.string(), "-o", (file.parent_path() / "out").string()});
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  json summary = test::read_json(file.parent_path() / "out" / "summary.json");
+  EXPECT_EQ(summary["status"], "unstable");
+  EXPECT_EQ(summary["diagnostic"]["what"], "inverted_between_points") << summary["diagnostic"].dump();
+  EXPECT_TRUE(summary["diagnostic"]["where"][0].contains("node")) << summary["diagnostic"].dump();
+  EXPECT_FALSE(fs::exists(file.parent_path() / "out" / "result.vtu"));
+
+  file = pushed("warn");
+  result = test::run_mtled({"run", file.string(), "-o", (file.parent_path() / "out").string()});
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+  expect_contains(result.output, "background tets turned inside out");
+  summary = test::read_json(file.parent_path() / "out" / "summary.json");
+  EXPECT_GT(summary["monitors"]["inversion"]["inverted_tets"].get<long>(), 0) << summary["monitors"].dump();
+  EXPECT_LT(summary["monitors"]["inversion"]["smallest_volume_ratio"].get<double>(), 0.0);
+
+  const fs::path plain = variant("fold-none", [](json&) {});
+  result = test::run_mtled({"run", plain.string(), "-o", (plain.parent_path() / "out").string()});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  summary = test::read_json(plain.parent_path() / "out" / "summary.json");
+  EXPECT_EQ(summary["monitors"]["inversion"]["inverted_tets"].get<long>(), 0);
+  EXPECT_GT(summary["monitors"]["inversion"]["smallest_volume_ratio"].get<double>(), 0.5);
+}
+
 TEST(Cli, OverridesAndUnknownCommands) {
   const fs::path out = test::scratch_dir("cli-set") / "out";
   auto result = test::run_mtled({"run", kSmallCube.string(), "-o", out.string(), "--set", "/materials/0/mu=-5"});

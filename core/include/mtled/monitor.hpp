@@ -40,6 +40,8 @@ class StepMonitor {
   virtual std::string name() const = 0;
   // Throws InstabilityError (naming the step, what and where) to stop the run.
   virtual void after_step(const StepRecord& step) = 0;
+  // After the run's last step (the loop ended normally); may throw as after_step does.
+  virtual void after_run(const StepRecord&) {}
   // Its record for summary.json.
   virtual json report() const = 0;
 };

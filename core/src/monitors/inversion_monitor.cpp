@@ -1,0 +1,76 @@
+#include "monitors/inversion_monitor.hpp"
+
+#include <fmt/format.h>
+
+#include "mtled/log.hpp"
+#include "mtled/model.hpp"
+#include "monitors/instability.hpp"
+
+namespace mtled {
+
+void InversionMonitor::check(const StepRecord& step) {
+  const Model& model = *step.model;
+  interpolated_.resize(step.u.size());
+  model.interpolate(step.u, interpolated_);
+  const auto& mesh = model.mesh();
+  const auto moved = [&](Index node) {
+    const double* d = interpolated_.data() + 3 * static_cast<std::size_t>(node);
+    return Vec3(mesh.points[node] + Vec3(d[0], d[1], d[2]));
+  };
+  double smallest = INFINITY;
+  Index worst = 0;
+  long inverted = 0;
+  for (Index t = 0; t < mesh.tet_count(); ++t) {
+    const auto& v = mesh.tets[t];
+    const Vec3 a = moved(v[0]);
+    const double volume = (moved(v[1]) - a).cross(moved(v[2]) - a).dot(moved(v[3]) - a) / 6.0;
+    const double ratio = volume / tet_volume(mesh, t);
+    if (ratio < smallest) smallest = ratio, worst = t;
+    inverted += ratio <= 0.0;
+  }
+  ++checks_;
+  last_checked_ = step.step;
+  if (smallest < smallest_ratio_) smallest_ratio_ = smallest, smallest_at_ = step.step;
+  if (smallest > 0.0) return;
+  // Name the vertex that moved farthest: the node a driver pushed through its neighbours.
+  Index node = mesh.tets[worst][0];
+  for (Index v : mesh.tets[worst])
+    if ((moved(v) - mesh.points[v]).norm() > (moved(node) - mesh.points[node]).norm()) node = v;
+  const bool first = inverted_tets_ == 0;
+  inverted_tets_ = std::max(inverted_tets_, inverted);
+  if (first) first_inverted_at_ = step.step;
+  worst_node_ = node;
+  worst_position_ = mesh.points[node];
+  if (!stop_) {
+    if (first)
+      log().warn("step {}: {} background tets turned inside out (the worst {:.3g} times its volume, around node {} at "
+                 "{} m): material folded between integration points; /monitors/inversion = \"stop\" ends such runs",
+                 step.step, inverted, smallest, node, point_text(mesh.points[node]));
+    return;
+  }
+  throw node_instability(
+      step.step, step.time, "inverted_between_points",
+      fmt::format("background tet {} is turned inside out by the interpolated displacements (moved volume {:.3g} "
+                  "times its reference volume): the material folded between integration points around node {}, "
+                  "which moved {:.3g} mm; a driver pushes single nodes through the tissue. Drive material points "
+                  "or a surface instead (the kinematic needle's \"driven\": \"shaft_surface\"), or refine the mesh "
+                  "where it pushes",
+                  worst, smallest, node, 1e3 * (moved(node) - mesh.points[node]).norm()),
+      model, node);
+}
+
+json InversionMonitor::report() const {
+  json record = {{"every_steps", every_},
+          {"checks", checks_},
+          {"action", stop_ ? "stop" : "warn"},
+          {"inverted_tets", inverted_tets_},
+          {"smallest_volume_ratio", std::isfinite(smallest_ratio_) ? json(smallest_ratio_) : json(nullptr)},
+          {"smallest_volume_ratio_step", smallest_at_}};
+  if (inverted_tets_ > 0)
+    record["first_inverted"] = {{"step", first_inverted_at_},
+                                {"node", worst_node_},
+                                {"coordinates_m", {worst_position_[0], worst_position_[1], worst_position_[2]}}};
+  return record;
+}
+
+}  // namespace mtled

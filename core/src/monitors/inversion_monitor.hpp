@@ -1,0 +1,39 @@
+#pragma once
+// /monitors/inversion_every_steps: the background tets moved by the interpolated displacements at their
+// vertices, every that many steps and after the last one. A tet whose moved volume is not positive means the
+// material folded between integration points (a driver pushed single nodes through it), which no integration
+// point's J need show. /monitors/inversion says what then: "stop" ends the run (InstabilityError
+// "inverted_between_points"), "warn" logs it once and records it in summary.json.
+#include <cmath>
+#include <vector>
+
+#include "mtled/monitor.hpp"
+
+namespace mtled {
+
+class InversionMonitor final : public StepMonitor {
+ public:
+  InversionMonitor(long every, bool stop) : every_(every), stop_(stop) {}
+  std::string name() const override { return "inversion"; }
+  void after_step(const StepRecord& step) override {
+    if (step.step % every_ == 0) check(step);
+  }
+  void after_run(const StepRecord& last) override {
+    if (last_checked_ != last.step) check(last);
+  }
+  json report() const override;
+
+ private:
+  void check(const StepRecord& step);
+
+  long every_;
+  bool stop_;
+  long checks_ = 0, last_checked_ = -1, inverted_tets_ = 0, first_inverted_at_ = 0;
+  double smallest_ratio_ = INFINITY;  // the smallest moved volume over reference volume of any tet
+  long smallest_at_ = 0;
+  std::vector<double> interpolated_;
+  Index worst_node_ = 0;  // of the first check that found inverted tets
+  Vec3 worst_position_ = Vec3::Zero();
+};
+
+}  // namespace mtled
