@@ -7,7 +7,6 @@
 #include <unistd.h>
 
 #include <cstdlib>
-#include <regex>
 #include <string>
 #include <vector>
 
@@ -22,27 +21,14 @@ namespace mtled::app {
 
 namespace {
 
-fs::path runner_path() {
-  std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  return (ec ? fs::current_path() : self.parent_path()) / "mtled-conformance";
-}
-
-// The components a library or folder holds, from the file names (mtled-CATEGORY-NAME.so).
+// The components a library (or every library in a folder) holds, as the catalog names them from the files.
 std::vector<std::string> component_names(const fs::path& target) {
-  static const std::regex pattern(R"(mtled-(mesh|shape_function|material|boundary|needle|integrator)-([a-z][a-z0-9_]*)\.so)");
-  std::vector<std::string> names;
-  const auto add = [&](const fs::path& file) {
-    std::smatch match;
-    const std::string name = file.filename().string();
-    if (std::regex_match(name, match, pattern)) names.push_back(match[2]);
-  };
   std::error_code ec;
-  if (fs::is_directory(target, ec)) {
-    for (const auto& entry : fs::directory_iterator(target, ec)) add(entry.path());
-  } else {
-    add(target);
-  }
+  const bool folder = fs::is_directory(target, ec);
+  const PluginCatalog catalog({folder ? target : target.parent_path()});
+  std::vector<std::string> names;
+  for (const auto& available : catalog.available())
+    if (folder || fs::equivalent(available.file, target, ec)) names.push_back(available.name);
   return names;
 }
 
@@ -57,18 +43,19 @@ int conformance_command(const ConformanceOptions& options, const std::vector<fs:
     throw InputError(options.library.string(),
                      "not an mtled plugin: its file name must be mtled-CATEGORY-NAME.so (as mtled_add_plugin() "
                      "names it), or a folder holding such files");
-  const fs::path runner = runner_path();
+  const fs::path runner = executable_directory() / "mtled-conformance";
   if (!fs::exists(runner, ec))
     throw std::runtime_error(fmt::format("{} is missing: this mtled was built without its conformance runner "
                                          "(MTLED_BUILD_CONFORMANCE_RUNNER=OFF)",
                                          runner.string()));
   // The library's folder first, then the usual search path (--plugin-path, MTLED_PLUGIN_PATH or the default
-  // folder), so that the suites also find the shape function and mesh sources a test needs.
+  // folder), so that the suites also find the shape function and mesh sources a test needs: handed to the
+  // runner as its MTLED_PLUGIN_PATH, which its catalog searches as mtled's does.
   std::vector<fs::path> first = {fs::is_directory(options.library, ec) ? options.library : options.library.parent_path()};
   first.insert(first.end(), plugin_paths.begin(), plugin_paths.end());
   std::vector<std::string> folders;
   for (const auto& folder : plugin_search_path(first, {})) folders.push_back(fs::absolute(folder).string());
-  setenv("MTLED_CONFORMANCE_PLUGIN_PATH", fmt::format("{}", fmt::join(folders, ":")).c_str(), 1);
+  setenv("MTLED_PLUGIN_PATH", fmt::format("{}", fmt::join(folders, ":")).c_str(), 1);
   // Every test instantiated for one of the library's components: suites name them ".../NAME" (shape
   // functions also ".../NAME_variant").
   std::vector<std::string> filters;

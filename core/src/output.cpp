@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <sstream>
 #include <string_view>
@@ -92,19 +93,21 @@ struct VtuArray {
   std::vector<double> values;
 };
 
-std::vector<unsigned char> raw_bytes(const VtuArray& array) {
-  std::vector<unsigned char> bytes;
-  const auto append = [&bytes](const auto value) {
-    const auto* p = reinterpret_cast<const unsigned char*>(&value);
-    bytes.insert(bytes.end(), p, p + sizeof(value));
-  };
-  for (double v : array.values) {
-    if (array.type == "Float64") append(v);
-    else if (array.type == "Int64") append(static_cast<std::int64_t>(v));
-    else if (array.type == "Int32") append(static_cast<std::int32_t>(v));
-    else append(static_cast<std::uint8_t>(v));
+template <class T>
+std::vector<unsigned char> bytes_as(const std::vector<double>& values) {
+  std::vector<unsigned char> bytes(values.size() * sizeof(T));
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const T value = static_cast<T>(values[i]);
+    std::memcpy(bytes.data() + i * sizeof(T), &value, sizeof(T));
   }
   return bytes;
+}
+
+std::vector<unsigned char> raw_bytes(const VtuArray& array) {
+  if (array.type == "Float64") return bytes_as<double>(array.values);
+  if (array.type == "Int64") return bytes_as<std::int64_t>(array.values);
+  if (array.type == "Int32") return bytes_as<std::int32_t>(array.values);
+  return bytes_as<std::uint8_t>(array.values);
 }
 
 std::string base64(std::string_view bytes) {

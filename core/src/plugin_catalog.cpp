@@ -46,15 +46,7 @@ std::vector<fs::path> split_path_list(const std::string& text) {
     if (!item.empty()) paths.emplace_back(item);
   return paths;
 }
-}  // namespace
 
-fs::path executable_directory() {
-  std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  return ec ? fs::current_path() : self.parent_path();
-}
-
-namespace {
 bool same_contents(const fs::path& a, const fs::path& b) {
   std::error_code ec;
   if (fs::equivalent(a, b, ec)) return true;
@@ -64,6 +56,12 @@ bool same_contents(const fs::path& a, const fs::path& b) {
                     std::istreambuf_iterator<char>(in_b), std::istreambuf_iterator<char>());
 }
 }  // namespace
+
+fs::path executable_directory() {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::current_path() : self.parent_path();
+}
 
 std::vector<fs::path> plugin_search_path(const std::vector<fs::path>& command_line, const std::vector<fs::path>& scene) {
   std::vector<fs::path> path = command_line;

@@ -45,13 +45,14 @@ def ink_boxes(path):
     listed = items(root)
     drawn = [e for e in root.iter() if e.tag in DRAWN]
     background = drawn[0]  # the white rectangle
+    index = {id(e): i for i, e in enumerate(root.iter())}
+    elements = list(root.iter())
     boxes = []
     for kind, what, element in listed:
         alone = copy.deepcopy(root)
-        index = {id(e): i for i, e in enumerate(root.iter())}
         copies = list(alone.iter())
         keep = {index[id(element)], index[id(background)]}
-        for i, e in enumerate(root.iter()):
+        for i, e in enumerate(elements):
             if e.tag in DRAWN and i not in keep:
                 copies[i].set("visibility", "hidden")
         size, box = render(alone)

@@ -6,7 +6,6 @@
 
 #include <array>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -21,15 +20,7 @@ OneThread::~OneThread() { omp_set_num_threads(saved_); }
 
 fs::path source_dir() { return MTLED_TEST_SOURCE_DIR; }
 fs::path binary_dir() { return MTLED_TEST_BINARY_DIR; }
-#ifdef MTLED_CONFORMANCE_RUNNER
-// The installed runner: the plugin folder beside its bin/ folder (lib/mtled/plugins), as mtled's own.
-fs::path plugin_dir() {
-  std::error_code ec;
-  return fs::read_symlink("/proc/self/exe", ec).parent_path().parent_path() / "lib" / "mtled" / "plugins";
-}
-#else
 fs::path plugin_dir() { return MTLED_TEST_PLUGIN_DIR; }
-#endif
 
 fs::path scratch_dir(const std::string& name) {
   // ctest runs each test in its own process, in parallel: the folder is unique to the running test.
@@ -42,18 +33,13 @@ fs::path scratch_dir(const std::string& name) {
 }
 
 PluginCatalog& catalog() {
-  // `mtled conformance` passes its search path (the plugin's folder first) in MTLED_CONFORMANCE_PLUGIN_PATH.
-  static PluginCatalog instance([] {
-    std::vector<fs::path> folders;
-    if (const char* listed = std::getenv("MTLED_CONFORMANCE_PLUGIN_PATH"); listed != nullptr && *listed != '\0') {
-      std::stringstream stream(listed);
-      for (std::string folder; std::getline(stream, folder, ':');)
-        if (!folder.empty()) folders.emplace_back(folder);
-    } else {
-      folders.push_back(plugin_dir());
-    }
-    return folders;
-  }());
+#ifdef MTLED_CONFORMANCE_RUNNER
+  // The installed runner searches as mtled does (MTLED_PLUGIN_PATH, which `mtled conformance` sets to the
+  // plugin's folder and the usual path, else lib/mtled/plugins beside it).
+  static PluginCatalog instance(plugin_search_path({}, {}));
+#else
+  static PluginCatalog instance({plugin_dir()});
+#endif
   return instance;
 }
 

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include "mtled/log.hpp"
 #include "mtled/model.hpp"
 #include "monitors/instability.hpp"
@@ -38,9 +40,11 @@ void InversionMonitor::check(const StepRecord& step) {
     if ((moved(v) - mesh.points[v]).norm() > (moved(node) - mesh.points[node]).norm()) node = v;
   const bool first = inverted_tets_ == 0;
   inverted_tets_ = std::max(inverted_tets_, inverted);
-  if (first) first_inverted_at_ = step.step;
-  worst_node_ = node;
-  worst_position_ = mesh.points[node];
+  if (first) {
+    first_inverted_at_ = step.step;
+    first_node_ = node;
+    first_position_ = mesh.points[node];
+  }
   if (!stop_) {
     if (first)
       log().warn("step {}: {} background tets turned inside out (the worst {:.3g} times its volume, around node {} at "
@@ -68,8 +72,8 @@ json InversionMonitor::report() const {
           {"smallest_volume_ratio_step", smallest_at_}};
   if (inverted_tets_ > 0)
     record["first_inverted"] = {{"step", first_inverted_at_},
-                                {"node", worst_node_},
-                                {"coordinates_m", {worst_position_[0], worst_position_[1], worst_position_[2]}}};
+                                {"node", first_node_},
+                                {"coordinates_m", {first_position_[0], first_position_[1], first_position_[2]}}};
   return record;
 }
 

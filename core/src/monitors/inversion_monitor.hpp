@@ -32,8 +32,8 @@ class InversionMonitor final : public StepMonitor {
   double smallest_ratio_ = INFINITY;  // the smallest moved volume over reference volume of any tet
   long smallest_at_ = 0;
   std::vector<double> interpolated_;
-  Index worst_node_ = 0;  // of the first check that found inverted tets
-  Vec3 worst_position_ = Vec3::Zero();
+  Index first_node_ = 0;  // the farthest-moved vertex of the worst tet, at the first check that found one
+  Vec3 first_position_ = Vec3::Zero();
 };
 
 }  // namespace mtled

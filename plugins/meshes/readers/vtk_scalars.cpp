@@ -61,6 +61,12 @@ double read_as(const unsigned char* bytes) {
   std::memcpy(&value, bytes, sizeof(T));
   return static_cast<double>(value);
 }
+
+// An integer of `size` bytes, signed or unsigned as the type T of that size.
+template <class Signed, class Unsigned>
+double read_integer(const unsigned char* bytes, bool is_signed) {
+  return is_signed ? read_as<Signed>(bytes) : read_as<Unsigned>(bytes);
+}
 }  // namespace
 
 double decode_scalar(const unsigned char* data, ScalarType type, bool big_endian) {
@@ -68,25 +74,14 @@ double decode_scalar(const unsigned char* data, ScalarType type, bool big_endian
   std::memcpy(b, data, type.size);
   if (big_endian)
     for (std::size_t i = 0; i < type.size / 2; ++i) std::swap(b[i], b[type.size - 1 - i]);
-  switch (type.kind) {
-    case ScalarKind::real:
-      return type.size == 4 ? read_as<float>(b) : read_as<double>(b);
-    case ScalarKind::signed_integer:
-      switch (type.size) {
-        case 1: return read_as<std::int8_t>(b);
-        case 2: return read_as<std::int16_t>(b);
-        case 4: return read_as<std::int32_t>(b);
-        default: return read_as<std::int64_t>(b);
-      }
-    case ScalarKind::unsigned_integer:
-      switch (type.size) {
-        case 1: return read_as<std::uint8_t>(b);
-        case 2: return read_as<std::uint16_t>(b);
-        case 4: return read_as<std::uint32_t>(b);
-        default: return read_as<std::uint64_t>(b);
-      }
+  if (type.kind == ScalarKind::real) return type.size == 4 ? read_as<float>(b) : read_as<double>(b);
+  const bool is_signed = type.kind == ScalarKind::signed_integer;
+  switch (type.size) {
+    case 1: return read_integer<std::int8_t, std::uint8_t>(b, is_signed);
+    case 2: return read_integer<std::int16_t, std::uint16_t>(b, is_signed);
+    case 4: return read_integer<std::int32_t, std::uint32_t>(b, is_signed);
+    default: return read_integer<std::int64_t, std::uint64_t>(b, is_signed);
   }
-  return 0.0;
 }
 
 }  // namespace mtled::vtk
