@@ -6,6 +6,7 @@
 #include "mtled/interfaces/material.hpp"
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/interfaces/shape_functions.hpp"
+#include "mtled/interfaces/volumetric_treatment.hpp"
 
 namespace mtled {
 
@@ -17,6 +18,7 @@ Driver::~Driver() = default;
 BoundaryCondition::~BoundaryCondition() = default;
 NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
+VolumetricTreatment::~VolumetricTreatment() = default;
 DiscreteSystem::~DiscreteSystem() = default;
 
 void Material::stress_batch(StressBatch& batch) const noexcept {

@@ -92,12 +92,13 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   xi_.assign(padded, 0.0);
   xi_mean_.assign(3 * static_cast<std::size_t>(integration_point_count()), 0.0);
   if (options.consistent_integration) build_integration_correction();
-  if (options.nodal_volumetric_averaging) build_volumetric_averaging();
   padded_u_.assign(padded, 0.0);
   team_ = std::make_unique<ThreadTeam>(options.threads > 0 ? options.threads : omp_get_max_threads());
   thread_forces_.resize(static_cast<std::size_t>(team_->size()));
   for (auto& buffer : thread_forces_) buffer.assign(padded, 0.0);
   thread_first_bad_.assign(thread_forces_.size(), std::numeric_limits<Index>::max());
+  volumetric_ = std::move(options.volumetric);
+  if (volumetric_) volumetric_->setup(*this);
 }
 
 Model::~Model() = default;
@@ -431,7 +432,7 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
 }
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
-  if (averaging_.enabled) return internal_forces_averaged(u, f);
+  if (volumetric_) return volumetric_->internal_forces(*this, u, f);
   const std::int64_t n = integration_point_count();
   std::vector<Index>& first_bad = thread_first_bad_;
   team_->run([&](int thread) {
@@ -450,167 +451,57 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
   return bad == std::numeric_limits<Index>::max() ? -1 : bad;
 }
 
-void Model::build_volumetric_averaging() {
-  VolumetricAveraging& a = averaging_;
-  const auto nodes = static_cast<std::size_t>(node_count());
-  const auto points = static_cast<std::size_t>(integration_point_count());
-  a.node_points.offsets.assign(nodes + 1, 0);
-  for (Index ip = 0; ip < integration_point_count(); ++ip)
-    for (Index v : mesh_.tets[ip_tet_[ip]]) ++a.node_points.offsets[v + 1];
-  for (std::size_t i = 0; i < nodes; ++i) a.node_points.offsets[i + 1] += a.node_points.offsets[i];
-  a.node_points.nodes.resize(static_cast<std::size_t>(a.node_points.offsets.back()));
-  std::vector<std::int64_t> next(a.node_points.offsets.begin(), a.node_points.offsets.end() - 1);
-  a.node_weight.assign(nodes, 0.0);
-  // Filled in point order, so every node sums its points in the same order whatever the thread count.
-  for (Index ip = 0; ip < integration_point_count(); ++ip)
-    for (Index v : mesh_.tets[ip_tet_[ip]]) {
-      a.node_points.nodes[next[v]++] = ip;
-      a.node_weight[v] += ip_weight_[ip];
-    }
-  for (std::size_t i = 0; i < nodes; ++i)
-    if (!(a.node_weight[i] > 0.0)) a.node_weight[i] = 1.0;  // a vertex of no tet: never read
-  a.J.resize(points);
-  a.J_bar.resize(points);
-  a.pressure.resize(points);
-  a.local_stress.resize(points);
-  a.cofactor.resize(points);
-  a.node_value.resize(nodes);
-  a.enabled = true;
-}
-
-// J_I = sum_p w_p J_p / sum_p w_p over the points p of the tets around node I; J_bar at a point is the mean of
-// J_I over its tet's four vertices. Leaves F in local_stress and J F^-T in cofactor for the force pass.
-void Model::averaged_dilatation(std::span<const double> u, Index& first_bad_point) const {
-  const VolumetricAveraging& a = averaging_;
+Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F) const {
   const Index n = integration_point_count();
   const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
   std::vector<Index>& first_bad = thread_first_bad_;
   team_->run([&](int thread) {
-    const int size = team_->size();
-    first_bad[static_cast<std::size_t>(thread)] = std::numeric_limits<Index>::max();
+    Index& thread_bad = first_bad[static_cast<std::size_t>(thread)];
+    thread_bad = std::numeric_limits<Index>::max();
     pad_displacement(u, thread);
     team_->barrier();
     StressBatch batch{};
-    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, size);
+    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, team_->size());
     for (auto b = batch_begin; b < batch_end; ++b) {
       const auto first = static_cast<Index>(b * StressBatch::kCapacity);
       batch.count = std::min<Index>(StressBatch::kCapacity, n - first);
       force_kernel::gather(ip_rows_, padded_u_.data(), first, n, batch);
       for (int p = 0; p < batch.count; ++p) {
-        const Index ip = first + p;
-        const Mat3 F = batch.deformation_gradient(p);
-        const double J = F.determinant();
-        a.local_stress[ip] = F;
-        a.J[ip] = J;
-        if (!(J > 0.0) || !std::isfinite(J) || !F.allFinite()) {
-          first_bad[static_cast<std::size_t>(thread)] = std::min(first_bad[static_cast<std::size_t>(thread)], ip);
-          a.cofactor[ip].setZero();
-          continue;
-        }
-        a.cofactor[ip] = J * F.inverse().transpose();
+        F[first + p] = batch.deformation_gradient(p);
+        const double J = F[first + p].determinant();
+        if (!(J > 0.0) || !std::isfinite(J) || !F[first + p].allFinite()) thread_bad = std::min(thread_bad, first + p);
       }
-    }
-    team_->barrier();
-    const auto [node_begin, node_end] = ThreadTeam::share(node_count(), thread, size);
-    for (auto node = node_begin; node < node_end; ++node) {
-      double sum = 0.0;
-      for (std::int64_t k = a.node_points.offsets[node]; k < a.node_points.offsets[node + 1]; ++k) {
-        const Index ip = a.node_points.nodes[k];
-        sum += ip_weight_[ip] * a.J[ip];
-      }
-      a.node_value[node] = sum / a.node_weight[node];
-    }
-    team_->barrier();
-    const auto [ip_begin, ip_end] = ThreadTeam::share(n, thread, size);
-    for (auto ip = ip_begin; ip < ip_end; ++ip) {
-      const auto& tet = mesh_.tets[ip_tet_[ip]];
-      a.J_bar[ip] = 0.25 * (a.node_value[tet[0]] + a.node_value[tet[1]] + a.node_value[tet[2]] + a.node_value[tet[3]]);
     }
   });
-  first_bad_point = std::min(first_bad_point, *std::min_element(first_bad.begin(), first_bad.end()));
+  const Index bad = *std::min_element(first_bad.begin(), first_bad.end());
+  return bad == std::numeric_limits<Index>::max() ? -1 : bad;
 }
 
-// E = sum_q w_q W(F_bar_q), F_bar = r F with r = (J_bar / J)^(1/3), so det F_bar = J_bar. Its gradient has a local
-// part, P_bar : dF_bar/dF at fixed J_bar = r (P_bar - (P_bar : F) F^-T / 3), and a part through every J_bar:
-// dW/dJ_bar = (P_bar : F_bar) / (3 J_bar) =: pi_q / w_q, and dJ_bar_q / dF_p = sum over the vertices I shared
-// by q's and p's tets of (1/4) w_p / W_I times J_p F_p^-T. Summed over q: point p carries the extra stress
-// w_p (sum over its tet's vertices I of Pi_I) J_p F_p^-T with Pi_I = (1/4) sum_q pi_q / W_I.
-Index Model::internal_forces_averaged(std::span<const double> u, std::span<double> f) const {
-  const VolumetricAveraging& a = averaging_;
+void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f) const {
   const Index n = integration_point_count();
-  Index bad = std::numeric_limits<Index>::max();
-  averaged_dilatation(u, bad);
-  if (bad != std::numeric_limits<Index>::max()) return bad;
-  std::vector<Index>& first_bad = thread_first_bad_;
+  const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
   team_->run([&](int thread) {
-    const int size = team_->size();
-    Index& thread_bad = first_bad[static_cast<std::size_t>(thread)];
-    const auto [ip_begin, ip_end] = ThreadTeam::share(n, thread, size);
-    for (auto ip = static_cast<Index>(ip_begin); ip < ip_end; ++ip) {
-      const Mat3 F = a.local_stress[ip];
-      const double r = std::cbrt(a.J_bar[ip] / a.J[ip]);
-      const Mat3 F_bar = r * F;
-      Mat3 S;
-      if (!ip_material(ip).stress(F_bar, S)) {
-        thread_bad = std::min(thread_bad, ip);
-        a.pressure[ip] = 0.0;
-        a.local_stress[ip].setZero();
-        a.cofactor[ip].setZero();
-        continue;
-      }
-      const Mat3 P_bar = F_bar * S;
-      const Mat3 F_inverse_transpose = a.cofactor[ip] / a.J[ip];
-      a.local_stress[ip] = (ip_weight_[ip] * r) * (P_bar - (P_bar.cwiseProduct(F).sum() / 3.0) * F_inverse_transpose);
-      a.pressure[ip] = ip_weight_[ip] * P_bar.cwiseProduct(F_bar).sum() / (3.0 * a.J_bar[ip]);
-    }
-    team_->barrier();
-    const auto [node_begin, node_end] = ThreadTeam::share(node_count(), thread, size);
-    for (auto node = node_begin; node < node_end; ++node) {
-      double sum = 0.0;
-      for (std::int64_t k = a.node_points.offsets[node]; k < a.node_points.offsets[node + 1]; ++k)
-        sum += a.pressure[a.node_points.nodes[k]];
-      a.node_value[node] = 0.25 * sum / a.node_weight[node];
-    }
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
     std::fill(local.begin(), local.end(), 0.0);
-    team_->barrier();
-    const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
     double P[9][StressBatch::kCapacity];
     const bool skip[StressBatch::kCapacity] = {};
-    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, size);
+    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, team_->size());
     for (auto b = batch_begin; b < batch_end; ++b) {
       const auto first = static_cast<Index>(b * StressBatch::kCapacity);
       const int count = std::min<Index>(StressBatch::kCapacity, n - first);
-      for (int p = 0; p < count; ++p) {
-        const auto& tet = mesh_.tets[ip_tet_[first + p]];
-        const double pressure =
-            a.node_value[tet[0]] + a.node_value[tet[1]] + a.node_value[tet[2]] + a.node_value[tet[3]];
-        const Mat3 stress = a.local_stress[first + p] + (ip_weight_[first + p] * pressure) * a.cofactor[first + p];
-        for (int c = 0; c < 9; ++c) P[c][p] = stress(c / 3, c % 3);
-      }
+      for (int p = 0; p < count; ++p)
+        for (int c = 0; c < 9; ++c) P[c][p] = weighted_stress[first + p](c / 3, c % 3);
       force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, local.data());
     }
     team_->barrier();
     reduce_thread_forces(f, thread);
   });
-  bad = *std::min_element(first_bad.begin(), first_bad.end());
-  return bad == std::numeric_limits<Index>::max() ? -1 : bad;
 }
 
 double Model::strain_energy(std::span<const double> u) const {
+  if (volumetric_) return volumetric_->strain_energy(*this, u);
   const Index n = integration_point_count();
   double energy = 0.0;
-  if (averaging_.enabled) {
-    Index first_bad = std::numeric_limits<Index>::max();
-    averaged_dilatation(u, first_bad);
-    if (first_bad != std::numeric_limits<Index>::max()) return std::numeric_limits<double>::quiet_NaN();
-#pragma omp parallel for schedule(static) reduction(+ : energy)
-    for (Index ip = 0; ip < n; ++ip) {
-      const double r = std::cbrt(averaging_.J_bar[ip] / averaging_.J[ip]);
-      energy += ip_weight_[ip] * ip_material(ip).energy(r * averaging_.local_stress[ip]);
-    }
-    return energy;
-  }
 #pragma omp parallel for schedule(static) reduction(+ : energy)
   for (Index ip = 0; ip < n; ++ip) energy += ip_weight_[ip] * ip_material(ip).energy(deformation_gradient(ip, u));
   return energy;

@@ -293,7 +293,7 @@ std::vector<fs::path> scene_plugin_paths(const SceneDocument& document) {
 const ComponentDeclaration& discretisation_declaration() {
   static const ComponentDeclaration declaration = [] {
     ComponentDeclaration d("discretisation", Category::scene);
-    d.summary("How the mesh becomes a meshless model: integration points per background tet.");
+    d.summary("How the mesh becomes a meshless model: integration points per background tet, consistent integration.");
     d.integer("integration_points_per_tet")
         .defaults(1)
         .choices({1, 4})
@@ -305,12 +305,6 @@ const ComponentDeclaration& discretisation_declaration() {
         .doc("correct the test-function gradients so that the discrete equations reproduce homogeneous "
              "deformations exactly (variationally consistent integration, Chen et al. 2013; passes the patch "
              "test); false gives the paper's plain MTLED quadrature");
-    d.string("volumetric")
-        .defaults("per_point")
-        .choices({"per_point", "nodal_average"})
-        .doc("how the volume change enters the stress: per_point uses each integration point's own J (the paper); "
-             "nodal_average uses J averaged over the tets around each node (an F-bar scheme) and removes the "
-             "volumetric locking of nearly incompressible materials under confinement (docs/validation.md)");
     return d;
   }();
   return declaration;
@@ -437,7 +431,8 @@ struct Validator {
 const std::vector<std::string>& top_level_keys() {
   static const std::vector<std::string> keys = {"$schema",   "description", "plugin_paths",   "mesh",
                                                 "shape_function", "materials", "boundaries", "needle",
-                                                "integrator", "discretisation", "output",   "monitors"};
+                                                "integrator", "volumetric", "discretisation", "output",
+                                                "monitors"};
   return keys;
 }
 
@@ -491,11 +486,22 @@ Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
   scene.shape_function = required("shape_function", Category::shape_function);
   scene.materials = v.component_list(root, "materials", Category::material, true);
   scene.boundaries = v.component_list(root, "boundaries", Category::boundary, false);
-  if (root.contains("needle")) scene.needle = v.component(root["needle"], "/needle", Category::needle);
+  // An optional block given as null is left out (--set /volumetric=null turns a scene's treatment off).
+  if (root.contains("needle") && !root["needle"].is_null())
+    scene.needle = v.component(root["needle"], "/needle", Category::needle);
   scene.integrator = required("integrator", Category::integrator);
+  if (root.contains("volumetric") && !root["volumetric"].is_null())
+    scene.volumetric = v.component(root["volumetric"], "/volumetric", Category::volumetric);
+  json discretisation = root.value("discretisation", json::object());
+  if (discretisation.is_object() && discretisation.contains("volumetric")) {  // where earlier scenes chose it
+    v.problems.push_back({"/discretisation/volumetric",
+                          "the volumetric treatment is a component now: write \"volumetric\": {\"type\": "
+                          "\"nodal_average\"} at the top level of the scene (leave it out for each point's own J)"});
+    discretisation.erase("volumetric");
+  }
   const json empty = json::object();
-  scene.discretisation = validate_parameters(discretisation_declaration(), root.value("discretisation", empty),
-                                             "/discretisation", v.problems, {});
+  scene.discretisation =
+      validate_parameters(discretisation_declaration(), discretisation, "/discretisation", v.problems, {});
   scene.output = validate_parameters(output_declaration(), root.value("output", empty), "/output", v.problems, {});
   scene.monitors =
       validate_parameters(monitors_declaration(), root.value("monitors", empty), "/monitors", v.problems, {});
@@ -535,6 +541,10 @@ json scene_json_schema(PluginCatalog& catalog) {
     }
     return json{{"oneOf", options}};
   };
+  auto optional = [](json schema) {
+    schema["oneOf"].push_back({{"type", "null"}});
+    return schema;
+  };
   json properties = {
       {"$schema", {{"type", "string"}}},
       {"description", {{"type", "string"}, {"description", "free text about the scene"}}},
@@ -544,8 +554,9 @@ json scene_json_schema(PluginCatalog& catalog) {
       {"shape_function", one_of(Category::shape_function)},
       {"materials", {{"type", "array"}, {"minItems", 1}, {"items", one_of(Category::material)}}},
       {"boundaries", {{"type", "array"}, {"items", one_of(Category::boundary)}}},
-      {"needle", one_of(Category::needle)},
+      {"needle", optional(one_of(Category::needle))},
       {"integrator", one_of(Category::integrator)},
+      {"volumetric", optional(one_of(Category::volumetric))},
       {"discretisation", discretisation_declaration().to_json_schema()},
       {"output", output_declaration().to_json_schema()},
       {"monitors", monitors_declaration().to_json_schema()}};

@@ -122,7 +122,7 @@ void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh
   Model::Options options;
   options.integration_points_per_tet = static_cast<int>(scene.discretisation.integer("integration_points_per_tet"));
   options.consistent_integration = scene.discretisation.boolean("consistent_integration");
-  options.nodal_volumetric_averaging = scene.discretisation.string("volumetric") == "nodal_average";
+  if (scene.volumetric) options.volumetric = build<VolumetricTreatment>(catalog, *scene.volumetric);
   model_ = std::make_unique<Model>(std::move(mesh), shape_functions, std::move(materials), options);
   const SupportStatistics stats = model_->ip_support_statistics();
   log().info("model: {} nodes, {} integration points, support size min/mean/max {}/{:.1f}/{}", model_->node_count(),

@@ -151,7 +151,7 @@ TEST(Scene, OverrideDoesNotCreateListsBelowAMissingKey) {
               std::string::npos)
         << e.what();
   }
-  EXPECT_EQ(parse_scene("{}", "empty.json", {"/discretisation/volumetric=nodal_average"}).root["discretisation"]["volumetric"],
+  EXPECT_EQ(parse_scene("{}", "empty.json", {"/volumetric/type=nodal_average"}).root["volumetric"]["type"],
             "nodal_average");
 }
 
@@ -165,6 +165,37 @@ TEST(Scene, CategoryMismatchIsAnUnknownType) {
     EXPECT_NE(text.find("/integrator/type: unknown integrator \"fixed\""), std::string::npos) << text;
     EXPECT_NE(text.find("/mesh: missing \"mesh\""), std::string::npos) << text;
     EXPECT_NE(text.find("/materials: missing \"materials\""), std::string::npos) << text;
+  }
+}
+
+TEST(Scene, VolumetricTreatmentIsAnOptionalComponentLoadedOnlyWhenNamed) {
+  const std::string base = R"({"mesh": {"type": "box", "size": [0.01, 0.01, 0.01], "target_nodes": 300},
+    "shape_function": {"type": "mls"}, "materials": [{"type": "neo_hookean", "mu": 1000, "D": 1e-4, "density": 1000}],
+    "integrator": {"type": "dynamic_relaxation"})";
+  {
+    PluginCatalog catalog({test::plugin_dir()});
+    const Scene scene = validate_scene(parse_scene(base + R"(, "volumetric": {"type": "nodal_average"}})", "s.json"),
+                                       catalog);
+    ASSERT_TRUE(scene.volumetric.has_value());
+    EXPECT_EQ(scene.volumetric->type, "nodal_average");
+  }
+  for (const char* off : {"}", R"(, "volumetric": null})"}) {
+    PluginCatalog catalog({test::plugin_dir()});
+    const Scene scene = validate_scene(parse_scene(base + off, "s.json"), catalog);
+    EXPECT_FALSE(scene.volumetric.has_value());
+    for (const auto& file : catalog.loaded_files()) EXPECT_EQ(file.find("volumetric"), std::string::npos) << file;
+  }
+  // Where earlier scenes chose it: one problem that says where it goes now.
+  PluginCatalog catalog({test::plugin_dir()});
+  try {
+    validate_scene(parse_scene(base + R"(, "discretisation": {"volumetric": "nodal_average"}})", "s.json"), catalog);
+    FAIL();
+  } catch (const InputError& e) {
+    ASSERT_EQ(e.problems().size(), 1u) << problems_text(e);
+    EXPECT_NE(problems_text(e).find("/discretisation/volumetric: the volumetric treatment is a component now: write "
+                                    "\"volumetric\": {\"type\": \"nodal_average\"}"),
+              std::string::npos)
+        << problems_text(e);
   }
 }
 

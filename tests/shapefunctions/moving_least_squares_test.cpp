@@ -15,6 +15,12 @@
 namespace mtled::test {
 namespace {
 
+Model::Options points_options(int points_per_tet) {
+  Model::Options options;
+  options.integration_points_per_tet = points_per_tet;
+  return options;
+}
+
 const Vec3 kBlock(0.03, 0.02, 0.025);  // as in the conformance suite: 5 mm cells, 30% jitter
 
 // A random quadratic written around the evaluation point: q(X) = a + g.d + d^T H d, d = X - x, so that
@@ -263,7 +269,7 @@ TEST(ShapeFunctionsInTheModel, HomogeneousDeformationIsExactAtEveryIntegrationPo
       SCOPED_TRACE(c.component + c.block.dump() + " " + std::to_string(points_per_tet) + " points per tet");
       const auto shape_functions = make<ShapeFunctions>(c.component, c.block);
       Model model(box_mesh(kBlock, 6, 4, 5, 0.3, 7), shape_functions, {std::make_shared<InertTestMaterial>()},
-                  Model::Options{points_per_tet});
+                  points_options(points_per_tet));
       const SupportStatistics stats = model.ip_support_statistics();
       RecordProperty(fmt::format("{}_{}ip_support_min_mean_max", c.label, points_per_tet),
                      fmt::format("{}/{:.1f}/{}", stats.min, stats.mean, stats.max));
@@ -296,7 +302,7 @@ TEST(ShapeFunctionsInTheModel, SupportsTooSmallForTheBasisAreAnInputError) {
   const auto quadratic = make<ShapeFunctions>("mls", {{"basis", "quadratic"}, {"support_dilatation", 1.0}});
   try {
     Model model(box_mesh(kBlock, 6, 4, 5, 0.3, 7), quadratic, {std::make_shared<InertTestMaterial>()},
-                Model::Options{1});
+                points_options(1));
     FAIL() << "a quadratic basis with d_c = 1 cannot be well posed everywhere on this mesh";
   } catch (const InputError& e) {
     ASSERT_FALSE(e.problems().empty());

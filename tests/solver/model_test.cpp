@@ -27,7 +27,7 @@ std::unique_ptr<Model> make_model(const std::string& shape_function = "mls", dou
   const auto m = test::make<Material>(material, parameters);
   Model::Options options;
   options.consistent_integration = consistent;
-  options.nodal_volumetric_averaging = nodal_average;
+  if (nodal_average) options.volumetric = test::make<VolumetricTreatment>("nodal_average", json::object());
   return std::make_unique<Model>(std::move(mesh), sf, std::vector<std::shared_ptr<const Material>>{m}, options);
 }
 

@@ -11,6 +11,7 @@
 
 #include "mtled/interfaces/material.hpp"
 #include "mtled/interfaces/shape_functions.hpp"
+#include "mtled/interfaces/volumetric_treatment.hpp"
 #include "mtled/mesh.hpp"
 #include "mtled/point_search.hpp"
 #include "mtled/thread_team.hpp"
@@ -81,11 +82,9 @@ class Model {
     // xi_J: the corrections at each point sum to zero, so the internal forces sum to zero and the reactions
     // balance (a per-node constant xi_I alone left 0.4-1.9% of the needle force unbalanced).
     bool consistent_integration = true;
-    // Nodally averaged dilatation (an F-bar scheme): each integration point uses F_bar = (J_bar / J)^(1/3) F,
-    // with J_bar the average over its tet's four vertices of the volume-weighted mean J of the tets around each.
-    // Relieves the volumetric locking of nearly incompressible materials (about five integration points per
-    // node each imposing J = 1); the forces stay the exact gradient of sum_ip w W(F_bar).
-    bool nodal_volumetric_averaging = false;
+    // How the volume change enters the stress (null: each integration point's own F). Set up at the end of
+    // the model's construction, then called for every force and energy evaluation.
+    std::shared_ptr<VolumetricTreatment> volumetric;
     // Threads of the force evaluation; 0: OpenMP's count (omp_get_max_threads(), set by --threads).
     int threads = 0;
   };
@@ -131,13 +130,20 @@ class Model {
     return {xi[0] - mean[0], xi[1] - mean[1], xi[2] - mean[2]};
   }
 
-  // Internal nodal forces f_I = sum_ip w F S (grad N_I + gradient_correction(ip, I)) for nodal parameters u (3 per node). Returns -1, or
-  // the lowest-numbered integration point whose F is inadmissible (J <= 0 or not finite); f is then
-  // incomplete. Parallel over integration points (the model's ThreadTeam); not re-entrant. With nodal volumetric averaging,
-  // f = dE/du of E = sum_ip w W(F_bar) (see Options).
+  // Internal nodal forces f_I = sum_ip w F S (grad N_I + gradient_correction(ip, I)) for nodal parameters u (3
+  // per node), or the volumetric treatment's. Returns -1, or the lowest-numbered integration point whose F is
+  // inadmissible (J <= 0 or not finite); f is then incomplete. Parallel over integration points (the model's
+  // ThreadTeam); not re-entrant.
   Index internal_forces(std::span<const double> u, std::span<double> f) const;
   double strain_energy(std::span<const double> u) const;
-  bool nodal_volumetric_averaging() const { return averaging_.enabled; }
+  const VolumetricTreatment* volumetric_treatment() const { return volumetric_.get(); }
+
+  // The two passes a volumetric treatment builds its forces from, each parallel on the model's team:
+  // F at every integration point (NaN-free; returns -1 or the lowest-numbered inadmissible point), and
+  // f_I = sum_ip s_ip (grad N_I + gradient_correction(ip, I)) from per-point stresses s_ip already multiplied
+  // by the point's weight.
+  Index deformation_gradients(std::span<const double> u, std::span<Mat3> F) const;
+  void scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f) const;
   Mat3 deformation_gradient(Index ip, std::span<const double> u) const;
   // Interpolated displacement at every node: u(X_J) = sum_I N_I(X_J) u_I.
   void interpolate(std::span<const double> u, std::span<double> out) const;
@@ -153,11 +159,6 @@ class Model {
   void build_time_steps();
   void build_integration_correction();
   std::vector<Vec3> solve_integration_correction(std::vector<Vec3> residual) const;
-  void build_volumetric_averaging();
-  // With averaging: J at every integration point (false at the first inadmissible one, stored in first_bad),
-  // then J_bar at every integration point.
-  void averaged_dilatation(std::span<const double> u, Index& first_bad) const;
-  Index internal_forces_averaged(std::span<const double> u, std::span<double> f) const;
   // Team tasks over thread `thread`'s share of the nodes: u into the padded per-node layout the kernel reads (4
   // per node, then the padding node's zeros); the per-thread force buffers summed into f.
   void pad_displacement(std::span<const double> u, int thread) const;
@@ -198,14 +199,7 @@ class Model {
   mutable std::vector<Index> thread_first_bad_;
   std::unique_ptr<ThreadTeam> team_;  // the time step's threads (setup loops use OpenMP)
 
-  // Nodal volumetric averaging: allocated only when the scene asks for it.
-  struct VolumetricAveraging {
-    bool enabled = false;
-    SupportRows node_points;            // node -> integration points whose tet has it as a vertex (no values)
-    std::vector<double> node_weight;    // sum of those points' weights
-    mutable std::vector<double> J, J_bar, node_value, pressure;  // scratch, per point / node / point
-    mutable std::vector<Mat3> local_stress, cofactor;            // scratch, per point
-  } averaging_;
+  std::shared_ptr<VolumetricTreatment> volumetric_;
 };
 
 }  // namespace mtled

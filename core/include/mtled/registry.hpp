@@ -14,6 +14,7 @@
 #include "mtled/interfaces/material.hpp"
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/interfaces/shape_functions.hpp"
+#include "mtled/interfaces/volumetric_treatment.hpp"
 #include "mtled/parameters.hpp"
 
 namespace mtled {
@@ -48,7 +49,8 @@ class Registry {
 
  private:
   using AnyFactory = std::variant<Factory<MeshSource>, Factory<ShapeFunctions>, Factory<Material>,
-                                  Factory<BoundaryCondition>, Factory<NeedleModel>, Factory<TimeIntegrator>>;
+                                  Factory<BoundaryCondition>, Factory<NeedleModel>, Factory<TimeIntegrator>,
+                                  Factory<VolumetricTreatment>>;
   struct Entry {
     ComponentDeclaration declaration;
     AnyFactory factory;

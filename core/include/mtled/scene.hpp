@@ -50,6 +50,7 @@ struct Scene {
   std::vector<ComponentBlock> boundaries;
   std::optional<ComponentBlock> needle;
   ComponentBlock integrator;
+  std::optional<ComponentBlock> volumetric;  // absent: each integration point's own J
   Parameters discretisation;
   Parameters output;
   Parameters monitors;

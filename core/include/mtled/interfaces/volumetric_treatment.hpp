@@ -1,0 +1,32 @@
+#pragma once
+// How the volume change enters the stress. Without a treatment (the scene has no "volumetric" block) every
+// integration point uses its own deformation gradient F, as the paper does. A treatment replaces the model's
+// force evaluation by its own passes over the integration points, built from the model's two primitives:
+// F at every point (Model::deformation_gradients) and nodal forces from a weighted first Piola-Kirchhoff stress
+// at every point (Model::scatter_stresses), with the model's thread team for its own per-node loops. F-bar,
+// B-bar and three-field (u-p-J) schemes are treatments of this kind (FEBio's three-field solid domain is one).
+#include <span>
+
+#include "mtled/parameters.hpp"
+#include "mtled/types.hpp"
+
+namespace mtled {
+
+class Model;
+
+class VolumetricTreatment {
+ public:
+  static constexpr Category category = Category::volumetric;
+  virtual ~VolumetricTreatment();
+
+  // Once, at the end of building `model`: the treatment may keep per-point and per-node storage for it (an
+  // instance serves one model).
+  virtual void setup(const Model& model) = 0;
+  // Internal nodal forces f = dE/du for nodal parameters u (3 per node), E the treatment's discrete strain
+  // energy. Returns -1, or the lowest-numbered integration point whose F is inadmissible (f is then incomplete).
+  virtual Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f) = 0;
+  // E(u); NaN when some F is inadmissible.
+  virtual double strain_energy(const Model& model, std::span<const double> u) = 0;
+};
+
+}  // namespace mtled
