@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mtled/monitors/scene_monitors.hpp"
+
 namespace mtled {
 
 // Per-tet fields of result.vtu, averaged over each tet's integration points.
@@ -69,10 +71,10 @@ json error_indicators(Simulation& simulation) {
   const Model& model = simulation.model();
   const double strain = model.strain_energy(simulation.displacement());
   const double h = integrator.time_step;
-  const double kinetic = simulation.kinetic_energy();
+  const double kinetic = monitored_kinetic_energy(simulation);
   out["strain_energy_J"] = strain;
-  out["kinetic_energy_J"] = kinetic;
-  out["kinetic_over_strain_energy"] = strain > 0.0 ? json(kinetic / strain) : json(nullptr);
+  out["kinetic_energy_J"] = std::isfinite(kinetic) ? json(kinetic) : json(nullptr);
+  out["kinetic_over_strain_energy"] = strain > 0.0 && std::isfinite(kinetic) ? json(kinetic / strain) : json(nullptr);
   // The time step used against the stable estimate for the masses in use (mass-scaled under dynamic
   // relaxation); above 1 the monitors must catch a blow-up.
   const double stable = simulation.stable_time_step();

@@ -12,6 +12,7 @@
 #include "commands.hpp"
 #include "mtled/analysis/postprocess.hpp"
 #include "mtled/log.hpp"
+#include "mtled/monitors/scene_monitors.hpp"
 #include "mtled/output.hpp"
 #include "mtled/simd.hpp"
 #include "mtled/simulation.hpp"
@@ -174,6 +175,7 @@ class SceneRun {
     try {
       const auto setup_start = Clock::now();
       simulation_ = std::make_unique<Simulation>(scene_, catalog_);
+      add_scene_monitors(*simulation_, scene_);
       setup_time_ = seconds_since(setup_start);
       log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time_, simulation_->unscaled_stable_time_step());
       observer_ = std::make_unique<RunObserver>(folder_, *simulation_, scene_.output, progress);

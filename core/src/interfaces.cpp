@@ -7,6 +7,7 @@
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/interfaces/shape_functions.hpp"
 #include "mtled/interfaces/volumetric_treatment.hpp"
+#include "mtled/monitor.hpp"
 
 namespace mtled {
 
@@ -19,6 +20,7 @@ BoundaryCondition::~BoundaryCondition() = default;
 NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
 VolumetricTreatment::~VolumetricTreatment() = default;
+StepMonitor::~StepMonitor() = default;
 DiscreteSystem::~DiscreteSystem() = default;
 
 void Material::stress_batch(StressBatch& batch) const noexcept {

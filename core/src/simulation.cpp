@@ -6,10 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "monitors/energy_monitor.hpp"
-#include "monitors/instability.hpp"
-#include "monitors/inversion_monitor.hpp"
-#include "monitors/stable_step_monitor.hpp"
+#include "mtled/instability.hpp"
 #include "mtled/log.hpp"
 
 namespace mtled {
@@ -113,7 +110,6 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   constraint_system_->enforce(u_, 1.0);
 
   integrator_ = build<TimeIntegrator>(catalog, scene.integrator);
-  build_monitors(scene);
 }
 
 void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
@@ -154,19 +150,6 @@ void Simulation::build_drivers(const Scene& scene, PluginCatalog& catalog) {
                                                     constraint_sets_[a]->name));
   constraint_system_ = std::make_unique<ConstraintSystem>(*model_);
 
-}
-
-void Simulation::build_monitors(const Scene& scene) {
-  auto energy = std::make_unique<EnergyMonitor>();
-  energy_ = energy.get();
-  monitors_.push_back(std::move(energy));
-  if (const long every = scene.monitors.integer("stable_step_every_steps"); every > 0) {
-    // 1e-7 of the body's size: far inside the linear range of any element, far above round-off in the forces.
-    monitors_.push_back(std::make_unique<StableStepMonitor>(
-        every, static_cast<int>(scene.monitors.integer("stable_step_iterations")), 1e-7 * model_->length_scale()));
-  }
-  if (const long every = scene.monitors.integer("inversion_every_steps"); every > 0)
-    monitors_.push_back(std::make_unique<InversionMonitor>(every, scene.monitors.string("inversion") == "stop"));
 }
 
 Simulation::~Simulation() = default;
@@ -267,7 +250,13 @@ StepRecord Simulation::last_step() const {
   return r;
 }
 
-double Simulation::kinetic_energy() const { return energy_->kinetic_energy(); }
+void Simulation::add_monitor(std::unique_ptr<StepMonitor> monitor) { monitors_.push_back(std::move(monitor)); }
+
+const StepMonitor* Simulation::monitor(std::string_view name) const {
+  for (const auto& m : monitors_)
+    if (m->name() == name) return m.get();
+  return nullptr;
+}
 
 json Simulation::monitor_reports() const {
   json reports = json::object();

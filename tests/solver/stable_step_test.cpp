@@ -1,4 +1,4 @@
-// The stable-step monitor (core/src/monitors/stable_step_monitor.cpp, scene section "monitors"): its Lanczos estimate of
+// The stable-step monitor (monitors/src/stable_step_monitor.cpp, scene section "monitors"): its Lanczos estimate of
 // 2 / sqrt(lambda_max(M^-1 K)) against the exact value from a K assembled column by column, the setup's
 // per-point bound against the same, detection of a time step above it, and no effect on the results.
 #include <gtest/gtest.h>
@@ -7,6 +7,7 @@
 
 #include "mtled/errors.hpp"
 #include "mtled/scene.hpp"
+#include "mtled/monitors/scene_monitors.hpp"
 #include "mtled/simulation.hpp"
 #include "test_support.hpp"
 
@@ -79,6 +80,7 @@ TEST(StableStepMonitor, LanczosEstimateMatchesTheAssembledSpectrum) {
   const Scene scene = make_scene(cube_scene({{"type", "dynamic_relaxation"}, {"load_steps", 1}},
                                             {{"stable_step_every_steps", 1000000}}, false));
   Simulation simulation(scene, test::catalog());
+  add_scene_monitors(simulation, scene);
   simulation.run(nullptr);
   const json report = simulation.monitor_reports().at("stable_step");
   ASSERT_EQ(report.at("checks").get<long>(), 1);
@@ -150,6 +152,7 @@ TEST(StableStepMonitor, ConstrainedEstimateMatchesTheConstrainedSpectrum) {
   const Scene scene = make_scene(cube_scene({{"type", "dynamic_relaxation"}, {"load_steps", 1}},
                                             {{"stable_step_every_steps", 1000000}}, true, 0.0));
   Simulation simulation(scene, test::catalog());
+  add_scene_monitors(simulation, scene);
   simulation.run(nullptr);
   const json report = simulation.monitor_reports().at("stable_step");
   ASSERT_EQ(report.at("checks").get<long>(), 1);
@@ -169,6 +172,7 @@ TEST(StableStepMonitor, StopsAStepAboveTheStableStepAtTheFirstCheck) {
       make_scene(cube_scene({{"type", "dynamic_relaxation"}, {"load_steps", 100}, {"time_step_factor", 10}},
                             json::object(), true));
   Simulation simulation(scene, test::catalog());
+  add_scene_monitors(simulation, scene);
   try {
     simulation.run(nullptr);
     FAIL() << "a time step 10 times the bound ran";
@@ -186,6 +190,7 @@ TEST(StableStepMonitor, ChangesNothingInTheResults) {
     const Scene scene = make_scene(cube_scene({{"type", "dynamic_relaxation"}, {"load_steps", 200}, {"tolerance", 1e-4}},
                                               {{"stable_step_every_steps", every}}, true));
     Simulation simulation(scene, test::catalog());
+    add_scene_monitors(simulation, scene);
     simulation.run(nullptr);
     EXPECT_EQ(simulation.monitor_reports().contains("stable_step"), every != 0);
     return std::vector<double>(simulation.displacement().begin(), simulation.displacement().end());

@@ -1,6 +1,6 @@
 #pragma once
 // A scene built into a running simulation: the mesh, the meshless model, the drivers (boundary conditions
-// and the needle), the integrator, the monitors and the state. Integrators advance the state through the
+// and the needle), the integrator, the monitors added to it and the state. Integrators advance the state through the
 // DiscreteSystem below; the kernel's loop (run) calls the monitors and the observer after each step.
 #include <functional>
 #include <memory>
@@ -58,22 +58,20 @@ class Simulation final : public DiscreteSystem {
   const ConstraintSystem& constraints() const { return *constraint_system_; }
   double unscaled_stable_time_step() const { return unscaled_stable_time_step_; }
   long force_evaluations() const { return force_evaluations_; }
-  // Kinetic energy at the last step (J), the energy monitor's: 1/2 v(n-1/2) . M v(n+1/2), the form central
-  // differences conserve (0 before the second step).
-  double kinetic_energy() const;
   // The step just completed, as the monitors see it.
   StepRecord last_step() const;
   // Interpolated displacement at every node (3 per node).
   std::vector<double> interpolated_displacement() const;
-  // Every monitor's record for summary.json, by name: "energy" always, "stable_step" when
-  // /monitors/stable_step_every_steps is not 0.
+  // Monitors run after every step in the order added (mtled/monitors/scene_monitors.hpp adds a scene's).
+  void add_monitor(std::unique_ptr<StepMonitor> monitor);
+  const StepMonitor* monitor(std::string_view name) const;  // null when none has that name
+  // Every monitor's record for summary.json, by name.
   json monitor_reports() const;
 
  private:
   void build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
                    std::vector<std::shared_ptr<const Material>> materials);
   void build_drivers(const Scene& scene, PluginCatalog& catalog);
-  void build_monitors(const Scene& scene);
   void update_drivers();
   // Stops the run (InstabilityError "non_finite") when the integrator's update is not finite.
   void check_finite(std::span<const double> u_new, double new_time) const;
@@ -100,7 +98,6 @@ class Simulation final : public DiscreteSystem {
   double step_size_ = 0.0, previous_step_size_ = 0.0;
   double time_step_factor_ = 1.0;  // the integrator's, read once it is initialised
   std::vector<std::unique_ptr<StepMonitor>> monitors_;
-  const class EnergyMonitor* energy_ = nullptr;  // among monitors_: always on
 };
 
 }  // namespace mtled

@@ -1,4 +1,4 @@
-#include "monitors/inversion_monitor.hpp"
+#include "inversion_monitor.hpp"
 
 #include <fmt/format.h>
 
@@ -6,7 +6,7 @@
 
 #include "mtled/log.hpp"
 #include "mtled/model.hpp"
-#include "monitors/instability.hpp"
+#include "mtled/instability.hpp"
 
 namespace mtled {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "instability.hpp"
+#include "mtled/instability.hpp"
 #include "mtled/constraints.hpp"
 #include "mtled/interfaces/driver.hpp"
 #include "mtled/thread_team.hpp"
@@ -15,8 +15,6 @@ namespace {
 // few dozen steps.
 constexpr double kMargin = 10.0;
 }  // namespace
-
-StepMonitor::~StepMonitor() = default;
 
 void EnergyMonitor::after_step(const StepRecord& step) {
   const auto& sets = *step.constraint_sets;

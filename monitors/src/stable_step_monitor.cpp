@@ -2,7 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "instability.hpp"
+#include "mtled/instability.hpp"
 #include "mtled/constraints.hpp"
 #include "mtled/log.hpp"
 

@@ -1,5 +1,5 @@
 #pragma once
-// The diagnostics the kernel's checks raise.
+// Diagnostics located at one node, as the kernel's checks and the monitors raise them.
 #include <fmt/format.h>
 
 #include <string>
