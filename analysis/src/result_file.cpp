@@ -7,7 +7,7 @@
 
 #include "mtled/errors.hpp"
 #include "mtled/json.hpp"
-#include "vtk_grid.hpp"
+#include "mtled/io/vtk_grid.hpp"
 
 namespace fs = std::filesystem;
 

@@ -13,7 +13,7 @@
 #include "mtled/analysis/postprocess.hpp"
 #include "mtled/log.hpp"
 #include "mtled/monitors/scene_monitors.hpp"
-#include "mtled/output.hpp"
+#include "mtled/io/output.hpp"
 #include "mtled/simd.hpp"
 #include "mtled/simulation.hpp"
 #include "mtled/version.hpp"

@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "mtled/analysis/compare.hpp"
-#include "mtled/output.hpp"
+#include "mtled/io/output.hpp"
 #include "test_support.hpp"
 #include "xml_check.hpp"
 

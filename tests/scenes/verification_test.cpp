@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 
 #include "mtled/analysis/result_file.hpp"
-#include "mtled/output.hpp"
+#include "mtled/io/output.hpp"
 #include "test_support.hpp"
 
 namespace mtled::test {

@@ -17,8 +17,8 @@
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
-#include "support/mesh_file.hpp"
-#include "support/text_cursor.hpp"
+#include "mtled/io/mesh_file.hpp"
+#include "mtled/io/text_cursor.hpp"
 
 namespace fs = std::filesystem;
 

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "mtled/mesh.hpp"
-#include "support/mesh_file.hpp"
+#include "mtled/io/mesh_file.hpp"
 
 namespace mtled::msh {
 

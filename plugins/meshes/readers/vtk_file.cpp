@@ -11,8 +11,8 @@
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
-#include "support/mesh_file.hpp"
-#include "vtk_grid.hpp"
+#include "mtled/io/mesh_file.hpp"
+#include "mtled/io/vtk_grid.hpp"
 
 namespace mtled {
 

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "mtled/output.hpp"
+#include "mtled/io/output.hpp"
 #include "reader_test_support.hpp"
 
 namespace mtled::test {

@@ -7,7 +7,7 @@
 
 #include "mtled/json.hpp"
 #include "mtled/model.hpp"
-#include "mtled/output.hpp"
+#include "mtled/io/output.hpp"
 #include "mtled/simulation.hpp"
 
 namespace mtled {

@@ -1,6 +1,6 @@
 #pragma once
 // Reading a run's result back: the result file of a run folder, and the points and interpolated
-// displacements of a result.vtu that mtled wrote (core/include/mtled/output.hpp writes them).
+// displacements of a result.vtu that mtled wrote (io/include/mtled/io/output.hpp writes them).
 #include <filesystem>
 #include <vector>
 

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "mtled/json.hpp"
-#include "mtled/output.hpp"
+#include "mtled/io/output.hpp"
 #include "mtled/types.hpp"
 
 namespace mtled {

@@ -3,8 +3,8 @@
 #include <cstring>
 #include <utility>
 
-#include "support/text_cursor.hpp"
-#include "vtk_grid.hpp"
+#include "mtled/io/text_cursor.hpp"
+#include "mtled/io/vtk_grid.hpp"
 
 namespace mtled::vtk {
 

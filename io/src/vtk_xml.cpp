@@ -13,8 +13,8 @@
 #include <zlib.h>
 
 #include "mtled/errors.hpp"
-#include "support/text_cursor.hpp"
-#include "vtk_grid.hpp"
+#include "mtled/io/text_cursor.hpp"
+#include "mtled/io/vtk_grid.hpp"
 
 namespace mtled::vtk {
 

@@ -11,7 +11,7 @@
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/mesh.hpp"
 #include "mtled/parameters.hpp"
-#include "text_cursor.hpp"
+#include "mtled/io/text_cursor.hpp"
 
 namespace mtled::mesh_readers {
 

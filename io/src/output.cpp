@@ -1,4 +1,4 @@
-#include "mtled/output.hpp"
+#include "mtled/io/output.hpp"
 
 #include <fmt/format.h>
 #include <unistd.h>

@@ -4,7 +4,7 @@
 #include <algorithm>
 
 #include "mtled/errors.hpp"
-#include "vtk_grid.hpp"
+#include "mtled/io/vtk_grid.hpp"
 
 namespace mtled::vtk {
 

@@ -1,4 +1,4 @@
-#include "text_cursor.hpp"
+#include "mtled/io/text_cursor.hpp"
 
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-#include "mesh_file.hpp"
+#include "mtled/io/mesh_file.hpp"
 
 #include <fmt/format.h>
 

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "mtled/types.hpp"
-#include "support/mesh_file.hpp"
+#include "mtled/io/mesh_file.hpp"
 
 namespace mtled::vtk {
 
