@@ -47,7 +47,9 @@ VtuFormat vtu_format(const Parameters& output) {
   return output.string("vtu_format") == "ascii" ? VtuFormat::ascii : VtuFormat::binary;
 }
 
-// Records needle.csv and reactions.csv rows, steps/*.vtu snapshots and the progress display.
+// Records needle.csv and reactions.csv rows, steps/*.vtu snapshots and the progress display. Under an integrator
+// that relaxes (dynamic relaxation), needle.csv holds the needle at each relaxed state (force against depth in
+// equilibrium) and needle_transient.csv the rows along the way; otherwise needle.csv holds the rows.
 class RunObserver final : public StepObserver {
  public:
   RunObserver(const OutputFolder& folder, const Simulation& simulation, const Parameters& output, bool progress)
@@ -59,6 +61,10 @@ class RunObserver final : public StepObserver {
     if (simulation.needle() != nullptr) {
       needle_ = folder.open_stream("needle.csv");
       needle_.out() << "time_s,depth_m,force_N,phase\n";
+      if (simulation.integrator().report().relaxation) {
+        needle_transient_ = folder.open_stream("needle_transient.csv");
+        needle_transient_.out() << "time_s,depth_m,transient_force_N,phase\n";
+      }
     }
     if (!simulation.constraint_sets().empty()) {
       reactions_ = folder.open_stream("reactions.csv");
@@ -71,6 +77,7 @@ class RunObserver final : public StepObserver {
     if (interrupted) throw Interrupted();
     const long step = simulation.step();
     if (step % history_every_ == 0) record(simulation);
+    if (needle_transient_.is_open()) record_equilibrium(simulation);
     if (snapshot_every_ > 0 && step % snapshot_every_ == 0 && step > 0) snapshot(simulation);
     if (progress_.due()) progress_.draw(simulation.load_fraction(), progress_text(simulation));
   }
@@ -79,6 +86,7 @@ class RunObserver final : public StepObserver {
     progress_.finish();
     if (last_recorded_ != simulation.step()) record(simulation);
     needle_.commit();
+    needle_transient_.commit();
     reactions_.commit();
     // ... and ends with the final one, which the run's last step need not be a multiple of every_steps to reach.
     if (snapshot_every_ > 0 && last_snapshot_ != simulation.step()) snapshot(simulation);
@@ -107,11 +115,25 @@ class RunObserver final : public StepObserver {
     return text;
   }
 
+  static void needle_row(const Simulation& simulation, OutputFolder::Stream& stream) {
+    const NeedleStatus s = simulation.needle()->status();
+    stream.out() << fmt::format("{:.10g},{:.10g},{:.10g},{}\n", simulation.time(), s.depth, s.force, to_string(s.phase));
+  }
+
+  // A needle.csv row at each state the relaxation reports steady.
+  void record_equilibrium(const Simulation& simulation) {
+    const long relaxed = simulation.integrator().report().relaxation->relaxed_states;
+    if (relaxed == relaxed_states_) return;
+    relaxed_states_ = relaxed;
+    needle_row(simulation, needle_);
+  }
+
   void record(const Simulation& simulation) {
     last_recorded_ = simulation.step();
-    if (needle_.is_open()) {
-      const NeedleStatus s = simulation.needle()->status();
-      needle_.out() << fmt::format("{:.10g},{:.10g},{:.10g},{}\n", simulation.time(), s.depth, s.force, to_string(s.phase));
+    if (needle_transient_.is_open()) {
+      needle_row(simulation, needle_transient_);
+    } else if (needle_.is_open()) {
+      needle_row(simulation, needle_);
     }
     if (reactions_.is_open()) {
       for (const auto* set : simulation.constraint_sets()) {
@@ -134,7 +156,8 @@ class RunObserver final : public StepObserver {
   long history_every_, snapshot_every_;
   VtuFormat format_;
   long last_recorded_ = -1, last_snapshot_ = -1;
-  OutputFolder::Stream needle_, reactions_;
+  long relaxed_states_ = 0;
+  OutputFolder::Stream needle_, needle_transient_, reactions_;
   std::vector<std::pair<double, std::string>> snapshots_;
   Progress progress_;
 };

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 namespace mtled {
 
 namespace {
-const char* const kOutputs[] = {"summary.json", "result.vtu", "series.pvd", "needle.csv", "reactions.csv",
+const char* const kOutputs[] = {"summary.json", "result.vtu", "series.pvd", "needle.csv", "needle_transient.csv", "reactions.csv",
                                 "histograms.svg", "compare.json"};
 
 fs::path temporary_name(const fs::path& final_path) {

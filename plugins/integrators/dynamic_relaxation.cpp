@@ -47,6 +47,10 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     d.boolean("mass_scaling").defaults(true).doc(
         "scale the density per integration point so every point has the same critical time step (changes the "
         "path to the steady state, not the steady state)");
+    d.integer("relaxed_increments").unit("1").at_least(1).defaults(1).doc(
+        "relax to the steady state at this many equally spaced points of the load ramp (the load held while it "
+        "relaxes, then the ramp goes on), so that needle.csv holds the force against depth in equilibrium at each; "
+        "1 relaxes only at full load");
     d.integer("damping_update_steps").unit("1").at_least(1).defaults(10).doc(
         "re-estimate the lowest eigenfrequency (and so the damping) every this many steps");
     d.example({{"load_steps", 200}, {"tolerance", 1e-5}});
@@ -60,6 +64,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
         converged_steps_(p.integer("converged_steps")),
         max_steps_(p.integer("max_steps")),
         mass_scaling_(p.boolean("mass_scaling")),
+        increments_(p.integer("relaxed_increments")),
         update_every_(p.integer("damping_update_steps")) {}
 
   void initialise(DiscreteSystem& system) override {
@@ -87,10 +92,12 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     if (n >= 2 && n % update_every_ == 0) estimate_frequency(u, u_previous, mass);
 
     explicit_update(u, u_previous, f_ext_, f_int_, mass, alpha_, beta_, u_next_);
-    const double fraction = load_fraction(curve_, static_cast<double>(n + 1) / static_cast<double>(load_steps_));
+    // The ramp advances until the current increment's end, then holds while the body relaxes.
+    if (ramp_step_ < increment_end()) ++ramp_step_;
+    const double fraction = load_fraction(curve_, static_cast<double>(ramp_step_) / static_cast<double>(load_steps_));
     system.complete_step(u_next_, static_cast<double>(n + 1) * h_, fraction, alpha_);
 
-    if (n + 1 >= load_steps_) check_convergence(system);
+    if (ramp_step_ >= increment_end()) relax(system);
     // A long relaxation shows nothing else while it runs (--log-level debug).
     if ((n + 1) % 500 == 0)
       log().debug("dynamic relaxation step {}: lowest frequency {:.4g} rad/s, rate {:.6f}, error bound {:.3g} m ({:.3g} "
@@ -102,10 +109,13 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
       d.time = system.time();
       d.what = "not_converged";
       // Stopped while still loading, there is no error estimate yet: say how far the load got instead.
-      d.detail = n + 1 < load_steps_
+      d.detail = ramp_step_ < load_steps_
                      ? fmt::format("dynamic relaxation stopped at /integrator/max_steps = {} while still applying the "
-                                   "load (step {} of /integrator/load_steps = {}); raise max_steps above load_steps",
-                                   max_steps_, n + 1, load_steps_)
+                                   "load (step {} of /integrator/load_steps = {}{}); raise max_steps above load_steps",
+                                   max_steps_, ramp_step_, load_steps_,
+                                   increments_ > 1 ? fmt::format(", {} of {} relaxed increments done", relaxed_,
+                                                                 increments_)
+                                                   : "")
                      : fmt::format("dynamic relaxation did not reach the steady state in {} steps: estimated error "
                                    "{:.3g} m against a tolerance of {:.3g} m; raise /integrator/max_steps or "
                                    "/integrator/tolerance",
@@ -122,12 +132,34 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     r.time_step = h_;
     r.stable_time_step = unscaled_stable_;
     r.time_step_factor = factor_;
-    r.relaxation = RelaxationReport{converged_, error_bound_, relative_error_bound(), tolerance_, omega_min_, rho_};
-    r.settings = {{"mass_scaling", mass_scaling_}, {"load_steps", load_steps_}};
+    r.relaxation = RelaxationReport{converged_, error_bound_, relative_error_bound(), tolerance_, omega_min_, rho_,
+                                    relaxed_};
+    r.settings = {{"mass_scaling", mass_scaling_}, {"load_steps", load_steps_}, {"relaxed_increments", increments_}};
     return r;
   }
 
  private:
+  // The ramp step at which increment relaxed_ + 1 ends (load_steps at the last).
+  long increment_end() const {
+    const long k = std::min(relaxed_ + 1, increments_);
+    return static_cast<long>(std::llround(static_cast<double>(load_steps_) * static_cast<double>(k) /
+                                          static_cast<double>(increments_)));
+  }
+
+  // Held at an increment's load: when the body is at rest there, count the equilibrium and go on loading (or
+  // finish at the last).
+  void relax(const DiscreteSystem& system) {
+    check_convergence(system);
+    if (!steady_) return;
+    ++relaxed_;
+    if (relaxed_ >= increments_) {
+      converged_ = true;
+      return;
+    }
+    below_ = 0;
+    steady_ = false;
+  }
+
   // The error bound as a fraction of the largest displacement (0 before there is any displacement).
   double relative_error_bound() const {
     return largest_displacement_ > 0 ? error_bound_ / largest_displacement_ : 0.0;
@@ -163,7 +195,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     largest_displacement_ = largest;
     error_bound_ = rho_ < 1.0 ? increment * rho_ / (1.0 - rho_) : INFINITY;
     below_ = error_bound_ <= tolerance_ * largest ? below_ + 1 : 0;
-    converged_ = below_ >= converged_steps_;
+    steady_ = below_ >= converged_steps_;
   }
 
   double factor_;
@@ -172,13 +204,16 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   double tolerance_;
   long converged_steps_, max_steps_;
   bool mass_scaling_;
+  long increments_;
   long update_every_;
 
   double unscaled_stable_ = 0.0, h_ = 0.0;
   double omega_min_ = 0.0, rho_ = 0.0, alpha_ = 0.0, beta_ = 0.0;
   double error_bound_ = INFINITY, largest_displacement_ = 0.0;
   long below_ = 0;
-  bool converged_ = false;
+  long ramp_step_ = 0;  // steps of the load ramp taken (the ramp holds while an increment relaxes)
+  long relaxed_ = 0;    // increments relaxed to the steady state
+  bool steady_ = false, converged_ = false;
   std::vector<double> f_int_, f_int_previous_, f_ext_, u_next_;
 };
 

@@ -48,6 +48,7 @@ struct RelaxationReport {
   double tolerance = 0.0;             // on relative_error_bound
   double lowest_frequency = 0.0;      // rad/s: the estimate the damping is tuned to
   double convergence_rate = 0.0;      // per step
+  long relaxed_states = 0;            // equilibria reached so far (one per relaxed load increment)
 };
 
 struct IntegratorReport {
