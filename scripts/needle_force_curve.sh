@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# The default scene's force against depth in equilibrium (needle.csv with 10 relaxed increments) against runs
+# stopped at each depth and relaxed there (the load ramp at the same rate), and the transient the relaxation
+# records along the way. Prints a table; about 3 minutes on 2 cores. Usage: scripts/needle_force_curve.sh [OUT]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-runs/needle-force-curve}
+mtled=${MTLED:-build/bin/mtled}
+scene=share/scenes/needle_small_sample.json
+mkdir -p "$out"
+"$mtled" run "$scene" -o "$out/curve" --set /integrator/relaxed_increments=10 > "$out/curve.log" 2>&1
+for k in 1 2 3 4 5 6 7 8 9 10; do
+  depth=$(python3 -c "print(0.0015 * $k)")
+  "$mtled" run "$scene" -o "$out/depth$k" --set /needle/depth=$depth --set /integrator/load_steps=$((200 * k)) \
+    > "$out/depth$k.log" 2>&1
+done
+python3 - "$out" <<'PY'
+import csv, json, sys
+out = sys.argv[1]
+curve = list(csv.DictReader(open(f"{out}/curve/needle.csv")))
+transient = list(csv.DictReader(open(f"{out}/curve/needle_transient.csv")))
+print("| depth (mm) | needle.csv, relaxed increments (N) | run relaxed at that depth (N) | difference | transient at that depth (N) |")
+print("| --- | --- | --- | --- | --- |")
+for k, row in enumerate(curve, 1):
+    depth = float(row["depth_m"])
+    alone = json.load(open(f"{out}/depth{k}/summary.json"))["needle"]["final_force_N"]
+    # The relaxation's transient: the first row at or past this depth on the way in.
+    moving = next(float(r["transient_force_N"]) for r in transient if float(r["depth_m"]) >= depth - 1e-12)
+    print(f"| {1e3 * depth:.1f} | {float(row['force_N']):.4f} | {alone:.4f} | {100 * (float(row['force_N']) / alone - 1):+.2f}% | {moving:.4f} |")
+PY
