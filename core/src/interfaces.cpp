@@ -21,6 +21,7 @@ NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
 VolumetricTreatment::~VolumetricTreatment() = default;
 StepMonitor::~StepMonitor() = default;
+StepControl::~StepControl() = default;
 DiscreteSystem::~DiscreteSystem() = default;
 
 void Material::stress_batch(StressBatch& batch) const noexcept {
@@ -93,7 +94,8 @@ json to_json(const IntegratorReport& report) {
   json out = {{"type", report.type},
               {"time_step_s", report.time_step},
               {"stable_time_step_s", report.stable_time_step},
-              {"time_step_factor", report.time_step_factor}};
+              {"time_step_factor", report.time_step_factor},
+              {"stable_step_margin", report.stable_step_margin}};
   if (const auto& r = report.relaxation) {
     out["converged"] = r->converged;
     out["error_bound_m"] = std::isfinite(r->error_bound) ? json(r->error_bound) : json(nullptr);

@@ -343,14 +343,24 @@ const ComponentDeclaration& monitors_declaration() {
     ComponentDeclaration d("monitors", Category::scene);
     d.summary(
         "Stability checks beyond the ones that are always on (non-finite values, J <= 0, energy growth): the "
-        "time step against the stable step of the current, deformed body (docs/stability.md).");
+        "time step against the stable step of the current, deformed body, adapted or stopped, and material "
+        "folded between integration points (docs/stability.md).");
     d.integer("stable_step_every_steps")
         .defaults(2000)
         .non_negative()
         .unit("1")
-        .doc("re-estimate the stable time step 2 / sqrt(lambda_max(M^-1 K)) at step 1 and then every this many "
-             "steps, by Lanczos iteration on finite differences of the internal forces, and stop (status "
-             "\"unstable\", what \"time_step_above_stable\") when the time step exceeds it by more than 5%; 0 turns the check off");
+        .doc("re-estimate the stable time step 2 / sqrt(lambda_max(M^-1 K)) of the current, deformed body at step 1 and "
+             "then every this many steps, by Lanczos iteration on finite differences of the internal forces (see "
+             "stable_step for what follows); 0 turns the re-estimate off");
+    d.string("stable_step")
+        .defaults("adapt")
+        .choices({"adapt", "stop"})
+        .doc("what a re-estimate below the time step in use does: \"adapt\" lowers the integrator's step to its "
+             "margin of the estimate (0.9 for dynamic_relaxation, 0.5 for central_difference) when the step exceeds "
+             "that (the margin covers the estimate's few percent, stiffening until the next re-estimate and, for "
+             "central differences, the unsymmetric stiffness; the step is never raised again); \"stop\" ends the "
+             "run (status "
+             "\"unstable\", what \"time_step_above_stable\") when the step exceeds the estimate by more than 5%");
     d.integer("stable_step_iterations")
         .defaults(20)
         .between(2, 200)

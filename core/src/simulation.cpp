@@ -247,6 +247,7 @@ StepRecord Simulation::last_step() const {
   r.external_forces = !force_sets_.empty();
   r.stable_time_step = stable_time_step_;
   r.time_step_factor = time_step_factor_;
+  r.stable_step_margin = stable_step_margin_;
   return r;
 }
 
@@ -267,10 +268,12 @@ json Simulation::monitor_reports() const {
 void Simulation::run(StepObserver* observer) {
   integrator_->initialise(*this);
   time_step_factor_ = integrator_->report().time_step_factor;
+  stable_step_margin_ = integrator_->report().stable_step_margin;
   if (observer != nullptr) observer->on_step(*this);
   while (!integrator_->finished(*this)) {
     integrator_->step(*this);
-    const StepRecord step = last_step();
+    StepRecord step = last_step();
+    step.control = this;
     for (const auto& monitor : monitors_) monitor->after_step(step);
     if (observer != nullptr) observer->on_step(*this);
   }
@@ -278,6 +281,14 @@ void Simulation::run(StepObserver* observer) {
     const StepRecord last = last_step();
     for (const auto& monitor : monitors_) monitor->after_run(last);
   }
+}
+
+// The integrators read stable_time_step() before every step and re-plan theirs when it changed.
+void Simulation::lower_stable_time_step(double stable_time_step) {
+  if (!(stable_time_step > 0.0) || !(stable_time_step < stable_time_step_)) return;
+  log().info("step {}: stable time step lowered from {:.4g} s to {:.4g} s (the deformed body is stiffer)", load_.step,
+             stable_time_step_, stable_time_step);
+  stable_time_step_ = stable_time_step;
 }
 
 std::vector<double> Simulation::interpolated_displacement() const {

@@ -14,7 +14,7 @@ void add_scene_monitors(Simulation& simulation, const Scene& scene) {
     // 1e-7 of the body's size: far inside the linear range of any element, far above round-off in the forces.
     simulation.add_monitor(std::make_unique<StableStepMonitor>(
         every, static_cast<int>(scene.monitors.integer("stable_step_iterations")),
-        1e-7 * simulation.model().length_scale()));
+        1e-7 * simulation.model().length_scale(), scene.monitors.string("stable_step") == "adapt"));
   }
   if (const long every = scene.monitors.integer("inversion_every_steps"); every > 0)
     simulation.add_monitor(std::make_unique<InversionMonitor>(every, scene.monitors.string("inversion") == "stop"));

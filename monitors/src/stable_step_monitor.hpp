@@ -1,7 +1,10 @@
 #pragma once
 // /monitors/stable_step_every_steps: re-estimates the stable step of the current, deformed body,
-// 2 / sqrt(lambda_max(M^-1 K)), at step 1 and every that many steps, and stops the run (InstabilityError
-// "time_step_above_stable") when the time step exceeds it by more than 5% (docs/stability.md).
+// 2 / sqrt(lambda_max(M^-1 K)), at step 1 and every that many steps. /monitors/stable_step "adapt" lowers the
+// integrator's step to its margin of the estimate (IntegratorReport::stable_step_margin) when the step is above
+// that (StepControl); "stop" ends the run
+// (InstabilityError "time_step_above_stable") when the time step exceeds the estimate by more than 5%
+// (docs/stability.md).
 #include <cmath>
 #include <vector>
 
@@ -12,8 +15,8 @@ namespace mtled {
 class StableStepMonitor final : public StepMonitor {
  public:
   // `perturbation_length`: the largest nodal perturbation of the force differences (m).
-  StableStepMonitor(long every, int iterations, double perturbation_length)
-      : every_(every), iterations_(iterations), perturbation_length_(perturbation_length) {}
+  StableStepMonitor(long every, int iterations, double perturbation_length, bool adapt)
+      : every_(every), iterations_(iterations), perturbation_length_(perturbation_length), adapt_(adapt) {}
   std::string name() const override { return "stable_step"; }
   void after_step(const StepRecord& step) override {
     if (step.step == 1 || step.step % every_ == 0) check(step);
@@ -30,6 +33,9 @@ class StableStepMonitor final : public StepMonitor {
   long every_;
   int iterations_;
   double perturbation_length_;
+  bool adapt_;
+  long lowered_ = 0;             // times the step was lowered
+  double lowest_step_ = 0.0;     // the smallest step it was lowered to (s)
   double setup_estimate_ = 0.0;
   std::vector<double> mode_;  // the last Ritz vector of the fastest mode, the next check's start
   long checks_ = 0, force_evaluations_ = 0;

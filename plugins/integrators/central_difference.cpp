@@ -42,8 +42,7 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
     planned_steps_ = static_cast<long>(std::ceil(duration_ / (factor_ * stable_)));
     h_ = duration_ / static_cast<double>(planned_steps_);  // lands exactly on the duration
     // Central differences of M u'' + c M u' = r with u' = (u+ - u-) / 2h: (1 + ch/2) u+ = 2u - (1 - ch/2) u- + h^2 M^-1 r.
-    beta_ = (2.0 - damping_ * h_) / (2.0 + damping_ * h_);
-    alpha_ = 2.0 * h_ * h_ / (2.0 + damping_ * h_);
+    set_coefficients();
     const std::size_t dofs = system.displacement().size();
     f_int_.assign(dofs, 0.0);
     f_ext_.assign(dofs, 0.0);
@@ -51,12 +50,14 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
   }
 
   void step(DiscreteSystem& system) override {
+    double alpha = alpha_, beta = beta_;
+    if (const double stable = system.stable_time_step(); stable != stable_) replan(system, stable, alpha, beta);
     system.internal_forces(system.displacement(), f_int_);
     if (system.has_external_forces()) system.external_forces(f_ext_);
-    explicit_update(system.displacement(), system.previous_displacement(), f_ext_, f_int_, system.mass(), alpha_, beta_,
+    explicit_update(system.displacement(), system.previous_displacement(), f_ext_, f_int_, system.mass(), alpha, beta,
                     u_next_);
-    const double t = static_cast<double>(system.step() + 1) * h_;
-    system.complete_step(u_next_, t, load_fraction(curve_, t / load_time_), alpha_);
+    const double t = time_origin_ + static_cast<double>(system.step() + 1 - step_origin_) * h_;
+    system.complete_step(u_next_, t, load_fraction(curve_, t / load_time_), alpha);
   }
 
   bool finished(const DiscreteSystem& system) const override { return system.step() >= planned_steps_; }
@@ -67,15 +68,46 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
     r.time_step = h_;
     r.stable_time_step = stable_;
     r.time_step_factor = factor_;
+    // Variationally consistent integration makes the stiffness slightly unsymmetric; its complex eigenvalue pairs
+    // grow under central differences as their step nears the stability limit (the undamped growth per step,
+    // Im(mu) / (2 sqrt(Re(mu)(1 - Re(mu)/4))) with mu = h^2 lambda, diverges there). Measured on the uniaxial cube
+    // with mass damping 60 1/s: the final force off by 79% at 0.8 of the limit, 0.15-0.35% at 0.7, 2e-5 at 0.5.
+    r.stable_step_margin = 0.5;
     r.settings = {{"planned_steps", planned_steps_}, {"damping_per_s", damping_}};
     return r;
   }
 
  private:
+  // The stable step was lowered (the body stiffened): the rest of the duration in steps of the new size, and
+  // this step's coefficients for the change of size (central differences with h_(n-1) != h_n: velocities at
+  // the half steps, the acceleration over the mean step h_bar):
+  //   u+ = u + (h_n / h_(n-1)) (2 - c h_bar) / (2 + c h_bar) (u - u-) + 2 h_n h_bar / (2 + c h_bar) M^-1 r.
+  void replan(const DiscreteSystem& system, double stable, double& alpha, double& beta) {
+    const double previous = h_;
+    const double remaining = duration_ - system.time();
+    const auto steps = std::max<long>(1, static_cast<long>(std::ceil(remaining / (factor_ * stable))));
+    stable_ = stable;
+    h_ = remaining / static_cast<double>(steps);
+    planned_steps_ = system.step() + steps;
+    time_origin_ = system.time();
+    step_origin_ = system.step();
+    const double mean = 0.5 * (previous + h_);
+    beta = (h_ / previous) * (2.0 - damping_ * mean) / (2.0 + damping_ * mean);
+    alpha = 2.0 * h_ * mean / (2.0 + damping_ * mean);
+    set_coefficients();
+  }
+
+  void set_coefficients() {
+    beta_ = (2.0 - damping_ * h_) / (2.0 + damping_ * h_);
+    alpha_ = 2.0 * h_ * h_ / (2.0 + damping_ * h_);
+  }
+
   double duration_, factor_, damping_, load_time_;
   LoadCurve curve_;
   double stable_ = 0.0, h_ = 0.0, alpha_ = 0.0, beta_ = 1.0;
   long planned_steps_ = 0;
+  double time_origin_ = 0.0;  // time and step at which the step size last changed
+  long step_origin_ = 0;
   std::vector<double> f_int_, f_ext_, u_next_;
 };
 

@@ -70,7 +70,8 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   void initialise(DiscreteSystem& system) override {
     unscaled_stable_ = system.stable_time_step();
     if (mass_scaling_) system.equalise_critical_steps();
-    h_ = factor_ * system.stable_time_step();
+    stable_in_use_ = system.stable_time_step();
+    h_ = factor_ * stable_in_use_;
     // Start heavily damped (k = 20) until the first estimate of the lowest frequency arrives.
     set_frequency(0.1 * 2.0 / h_);
     const std::size_t dofs = system.displacement().size();
@@ -81,6 +82,17 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   }
 
   void step(DiscreteSystem& system) override {
+    // The stable step was lowered (the body stiffened): go on with the smaller step. The last increment, made
+    // with the old step, is rescaled to the new one in this update (beta times the ratio of the steps).
+    double increment_scale = 1.0;
+    if (const double stable = system.stable_time_step(); stable != stable_in_use_) {
+      increment_scale = stable / stable_in_use_;
+      stable_in_use_ = stable;
+      time_origin_ = system.time();
+      step_origin_ = system.step();
+      h_ = factor_ * stable;
+      set_frequency(std::min(omega_min_, 2.0 / h_));
+    }
     const auto u = system.displacement();
     const auto u_previous = system.previous_displacement();
     const auto mass = system.mass();
@@ -91,11 +103,11 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     const long n = system.step();
     if (n >= 2 && n % update_every_ == 0) estimate_frequency(u, u_previous, mass);
 
-    explicit_update(u, u_previous, f_ext_, f_int_, mass, alpha_, beta_, u_next_);
+    explicit_update(u, u_previous, f_ext_, f_int_, mass, alpha_, beta_ * increment_scale, u_next_);
     // The ramp advances until the current increment's end, then holds while the body relaxes.
     if (ramp_step_ < increment_end()) ++ramp_step_;
     const double fraction = load_fraction(curve_, static_cast<double>(ramp_step_) / static_cast<double>(load_steps_));
-    system.complete_step(u_next_, static_cast<double>(n + 1) * h_, fraction, alpha_);
+    system.complete_step(u_next_, time_origin_ + static_cast<double>(n + 1 - step_origin_) * h_, fraction, alpha_);
 
     if (ramp_step_ >= increment_end()) relax(system);
     // A long relaxation shows nothing else while it runs (--log-level debug).
@@ -207,7 +219,9 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   long increments_;
   long update_every_;
 
-  double unscaled_stable_ = 0.0, h_ = 0.0;
+  double unscaled_stable_ = 0.0, stable_in_use_ = 0.0, h_ = 0.0;
+  double time_origin_ = 0.0;  // pseudo-time and step at which the step size last changed
+  long step_origin_ = 0;
   double omega_min_ = 0.0, rho_ = 0.0, alpha_ = 0.0, beta_ = 0.0;
   double error_bound_ = INFINITY, largest_displacement_ = 0.0;
   long below_ = 0;

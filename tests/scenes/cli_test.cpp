@@ -176,7 +176,7 @@ TEST(Cli, APluginThatThrowsWhileBeingBuiltExitsTwo) {
 void expect_detected_blow_up(const std::string& name, const json& integrator, bool stable_step_monitor) {
   const auto file = variant(name, [&](json& s) {
     s["integrator"] = integrator;
-    if (!stable_step_monitor) s["monitors"] = {{"stable_step_every_steps", 0}};
+    s["monitors"] = stable_step_monitor ? json{{"stable_step", "stop"}} : json{{"stable_step_every_steps", 0}};
   });
   const fs::path out = file.parent_path() / "out";
   const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});

@@ -63,7 +63,7 @@ TEST(Study, RecordsEveryConfigurationAndMarksTheParetoFront) {
           {{"/discretisation/consistent_integration", false},
            {"/integrator/load_steps", 3000},
            {"/integrator/tolerance", 1e-8}}}},
-        {{"label", "unstable"}, {"set", {{"/integrator/time_step_factor", 8.0}}}}}},
+        {{"label", "unstable"}, {"set", {{"/integrator/time_step_factor", 8.0}, {"/monitors/stable_step", "stop"}}}}}},
       {"sweep", {{"/integrator/tolerance", {1e-7}}}}};
   write_text(folder / "study.json", study.dump(2));
   const fs::path out = folder / "out";

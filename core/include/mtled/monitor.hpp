@@ -16,6 +16,15 @@ class Model;
 class ConstraintSystem;
 struct NodalConstraints;
 
+// What a monitor may change in the run it watches: the stable time step the integrator sizes its next steps by
+// (DiscreteSystem::stable_time_step). Only ever lowered: the stable-step monitor lowers it when the deformed body
+// has become stiffer than the setup estimate allowed for.
+class StepControl {
+ public:
+  virtual ~StepControl();
+  virtual void lower_stable_time_step(double stable_time_step) = 0;
+};
+
 // A completed step n -> n + 1, as a monitor sees it.
 struct StepRecord {
   long step = 0;            // n + 1
@@ -30,8 +39,10 @@ struct StepRecord {
   const std::vector<NodalConstraints*>* constraint_sets = nullptr;
   const std::vector<std::vector<Vec3>>* previous_values = nullptr;  // the sets' prescribed values at n
   bool external_forces = false;                                      // some driver applies forces
-  double stable_time_step = 0.0;  // the setup bound for the masses in use (before the integrator's factor)
+  double stable_time_step = 0.0;  // the stable step in use for the masses in use (before the integrator's factor)
   double time_step_factor = 1.0;  // the integrator's
+  double stable_step_margin = 0.9;  // the integrator's: the largest fraction of the stable step it should take
+  StepControl* control = nullptr;  // the run's, while the time loop calls the monitors
 };
 
 class StepMonitor {

@@ -21,7 +21,7 @@ struct StepObserver {
   virtual void on_step(const class Simulation& simulation) = 0;
 };
 
-class Simulation final : public DiscreteSystem {
+class Simulation final : public DiscreteSystem, private StepControl {
  public:
   Simulation(const Scene& scene, PluginCatalog& catalog);
   ~Simulation() override;
@@ -73,6 +73,7 @@ class Simulation final : public DiscreteSystem {
                    std::vector<std::shared_ptr<const Material>> materials);
   void build_drivers(const Scene& scene, PluginCatalog& catalog);
   void update_drivers();
+  void lower_stable_time_step(double stable_time_step) override;
   // Stops the run (InstabilityError "non_finite") when the integrator's update is not finite.
   void check_finite(std::span<const double> u_new, double new_time) const;
 
@@ -97,6 +98,7 @@ class Simulation final : public DiscreteSystem {
   std::vector<double> u_free_;  // this step's displacements before the constraint projection
   double step_size_ = 0.0, previous_step_size_ = 0.0;
   double time_step_factor_ = 1.0;  // the integrator's, read once it is initialised
+  double stable_step_margin_ = 0.9;  // the integrator's
   std::vector<std::unique_ptr<StepMonitor>> monitors_;
 };
 

@@ -56,6 +56,9 @@ struct IntegratorReport {
   double time_step = 0.0;         // s
   double stable_time_step = 0.0;  // s, of the unscaled masses, before the factor
   double time_step_factor = 1.0;
+  // The largest fraction of the current body's stable step the integrator should take: the stable-step monitor
+  // lowers the step to it when a re-estimate shows the step above it.
+  double stable_step_margin = 0.9;
   std::optional<RelaxationReport> relaxation;  // steady-state integrators only
   json settings = json::object();              // the integrator's other settings and counts
 };
