@@ -14,7 +14,7 @@ namespace mtled {
 
 class Model;
 class ConstraintSystem;
-struct NodalConstraints;
+class NodalConstraints;
 
 // What a monitor may change in the run it watches: the stable time step the integrator sizes its next steps by
 // (DiscreteSystem::stable_time_step). Only ever lowered: the stable-step monitor lowers it when the deformed body
