@@ -48,8 +48,9 @@ VtuFormat vtu_format(const Parameters& output) {
 }
 
 // Records needle.csv and reactions.csv rows, steps/*.vtu snapshots and the progress display. Under an integrator
-// that relaxes (dynamic relaxation), needle.csv holds the needle at each relaxed state (force against depth in
-// equilibrium) and needle_transient.csv the rows along the way; otherwise needle.csv holds the rows.
+// that relaxes (dynamic relaxation), needle.csv and reactions.csv hold each relaxed state (forces in equilibrium)
+// and needle_transient.csv and reactions_transient.csv the rows along the way; otherwise the first two hold the
+// rows.
 class RunObserver final : public StepObserver {
  public:
   RunObserver(const OutputFolder& folder, const Simulation& simulation, const Parameters& output, bool progress)
@@ -57,11 +58,12 @@ class RunObserver final : public StepObserver {
         history_every_(output.integer("history_every_steps")),
         snapshot_every_(output.integer("every_steps")),
         format_(vtu_format(output)),
+        relaxing_(simulation.integrator().report().relaxation.has_value()),
         progress_(progress) {
     if (simulation.needle() != nullptr) {
       needle_ = folder.open_stream("needle.csv");
       needle_.out() << "time_s,depth_m,force_N,phase\n";
-      if (simulation.integrator().report().relaxation) {
+      if (relaxing_) {
         needle_transient_ = folder.open_stream("needle_transient.csv");
         needle_transient_.out() << "time_s,depth_m,transient_force_N,phase\n";
       }
@@ -69,6 +71,10 @@ class RunObserver final : public StepObserver {
     if (!simulation.constraint_sets().empty()) {
       reactions_ = folder.open_stream("reactions.csv");
       reactions_.out() << "time_s,set,fx_N,fy_N,fz_N\n";
+      if (relaxing_) {
+        reactions_transient_ = folder.open_stream("reactions_transient.csv");
+        reactions_transient_.out() << "time_s,set,transient_fx_N,transient_fy_N,transient_fz_N\n";
+      }
     }
     if (snapshot_every_ > 0) snapshot(simulation);  // the series starts with the initial state
   }
@@ -77,7 +83,7 @@ class RunObserver final : public StepObserver {
     if (interrupted) throw Interrupted();
     const long step = simulation.step();
     if (step % history_every_ == 0) record(simulation);
-    if (needle_transient_.is_open()) record_equilibrium(simulation);
+    if (relaxing_) record_equilibrium(simulation);
     if (snapshot_every_ > 0 && step % snapshot_every_ == 0 && step > 0) snapshot(simulation);
     if (progress_.due()) progress_.draw(simulation.load_fraction(), progress_text(simulation));
   }
@@ -88,6 +94,7 @@ class RunObserver final : public StepObserver {
     needle_.commit();
     needle_transient_.commit();
     reactions_.commit();
+    reactions_transient_.commit();
     // ... and ends with the final one, which the run's last step need not be a multiple of every_steps to reach.
     if (snapshot_every_ > 0 && last_snapshot_ != simulation.step()) snapshot(simulation);
     if (!snapshots_.empty()) {
@@ -120,28 +127,26 @@ class RunObserver final : public StepObserver {
     stream.out() << fmt::format("{:.10g},{:.10g},{:.10g},{}\n", simulation.time(), s.depth, s.force, to_string(s.phase));
   }
 
-  // A needle.csv row at each state the relaxation reports steady.
+  static void reaction_rows(const Simulation& simulation, OutputFolder::Stream& stream) {
+    for (const auto* set : simulation.constraint_sets()) {
+      const Vec3 r = set->total_reaction();
+      stream.out() << fmt::format("{:.10g},{},{:.10g},{:.10g},{:.10g}\n", simulation.time(), set->name, r[0], r[1], r[2]);
+    }
+  }
+
+  // needle.csv and reactions.csv rows at each state the relaxation reports steady.
   void record_equilibrium(const Simulation& simulation) {
     const long relaxed = simulation.integrator().report().relaxation->relaxed_states;
     if (relaxed == relaxed_states_) return;
     relaxed_states_ = relaxed;
-    needle_row(simulation, needle_);
+    if (needle_.is_open()) needle_row(simulation, needle_);
+    if (reactions_.is_open()) reaction_rows(simulation, reactions_);
   }
 
   void record(const Simulation& simulation) {
     last_recorded_ = simulation.step();
-    if (needle_transient_.is_open()) {
-      needle_row(simulation, needle_transient_);
-    } else if (needle_.is_open()) {
-      needle_row(simulation, needle_);
-    }
-    if (reactions_.is_open()) {
-      for (const auto* set : simulation.constraint_sets()) {
-        const Vec3 r = set->total_reaction();
-        reactions_.out() << fmt::format("{:.10g},{},{:.10g},{:.10g},{:.10g}\n", simulation.time(), set->name, r[0], r[1],
-                                        r[2]);
-      }
-    }
+    if (needle_.is_open()) needle_row(simulation, relaxing_ ? needle_transient_ : needle_);
+    if (reactions_.is_open()) reaction_rows(simulation, relaxing_ ? reactions_transient_ : reactions_);
   }
 
   void snapshot(const Simulation& simulation) {
@@ -155,9 +160,10 @@ class RunObserver final : public StepObserver {
   const OutputFolder& folder_;
   long history_every_, snapshot_every_;
   VtuFormat format_;
+  bool relaxing_;
   long last_recorded_ = -1, last_snapshot_ = -1;
   long relaxed_states_ = 0;
-  OutputFolder::Stream needle_, needle_transient_, reactions_;
+  OutputFolder::Stream needle_, needle_transient_, reactions_, reactions_transient_;
   std::vector<std::pair<double, std::string>> snapshots_;
   Progress progress_;
 };

@@ -20,8 +20,9 @@ namespace fs = std::filesystem;
 namespace mtled {
 
 namespace {
-const char* const kOutputs[] = {"summary.json", "result.vtu", "series.pvd", "needle.csv", "needle_transient.csv", "reactions.csv",
-                                "histograms.svg", "compare.json"};
+const char* const kOutputs[] = {"summary.json",          "result.vtu",    "series.pvd",
+                                "needle.csv",            "needle_transient.csv", "reactions.csv",
+                                "reactions_transient.csv", "histograms.svg", "compare.json"};
 
 fs::path temporary_name(const fs::path& final_path) {
   return final_path.parent_path() / fmt::format(".{}.{}.tmp", final_path.filename().string(), ::getpid());

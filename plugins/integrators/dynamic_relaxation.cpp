@@ -48,9 +48,9 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
         "scale the density per integration point so every point has the same critical time step (changes the "
         "path to the steady state, not the steady state)");
     d.integer("relaxed_increments").unit("1").at_least(1).defaults(1).doc(
-        "relax to the steady state at this many equally spaced points of the load ramp (the load held while it "
-        "relaxes, then the ramp goes on), so that needle.csv holds the force against depth in equilibrium at each; "
-        "1 relaxes only at full load");
+        "relax to the steady state at this many equally spaced loads (1/N, 2/N, ... of the full load, each reached "
+        "along the load curve, held while the body relaxes), so that needle.csv and reactions.csv hold the forces "
+        "in equilibrium at each; 1 relaxes only at full load");
     d.integer("damping_update_steps").unit("1").at_least(1).defaults(10).doc(
         "re-estimate the lowest eigenfrequency (and so the damping) every this many steps");
     d.example({{"load_steps", 200}, {"tolerance", 1e-5}});
@@ -106,7 +106,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     explicit_update(u, u_previous, f_ext_, f_int_, mass, alpha_, beta_ * increment_scale, u_next_);
     // The ramp advances until the current increment's end, then holds while the body relaxes.
     if (ramp_step_ < increment_end()) ++ramp_step_;
-    const double fraction = load_fraction(curve_, static_cast<double>(ramp_step_) / static_cast<double>(load_steps_));
+    const double fraction = increment_load_fraction();
     system.complete_step(u_next_, time_origin_ + static_cast<double>(n + 1 - step_origin_) * h_, fraction, alpha_);
 
     if (ramp_step_ >= increment_end()) relax(system);
@@ -151,11 +151,21 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   }
 
  private:
-  // The ramp step at which increment relaxed_ + 1 ends (load_steps at the last).
-  long increment_end() const {
-    const long k = std::min(relaxed_ + 1, increments_);
+  // The ramp step at which increment k (0-based) begins; increment_end() is where the current one ends.
+  long increment_start(long k) const {
     return static_cast<long>(std::llround(static_cast<double>(load_steps_) * static_cast<double>(k) /
                                           static_cast<double>(increments_)));
+  }
+  long increment_end() const { return increment_start(std::min(relaxed_ + 1, increments_)); }
+
+  // Each increment carries the load from k / N to (k + 1) / N along the load curve (so the relaxed states sit at
+  // exactly k / N of the load, and a smooth curve starts and stops each increment without a jolt); one increment
+  // is the whole ramp.
+  double increment_load_fraction() const {
+    const long k = std::min(relaxed_, increments_ - 1);
+    const long begin = increment_start(k), end = increment_start(k + 1);
+    const double local = end > begin ? static_cast<double>(ramp_step_ - begin) / static_cast<double>(end - begin) : 1.0;
+    return (static_cast<double>(k) + load_fraction(curve_, local)) / static_cast<double>(increments_);
   }
 
   // Held at an increment's load: when the body is at rest there, count the equilibrium and go on loading (or

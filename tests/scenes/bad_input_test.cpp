@@ -80,7 +80,7 @@ TEST_P(BadInput, IsRefusedCleanly) {
 
   // Nothing that looks like a successful run: no result, and a summary (if any) that says what went wrong.
   if (fs::is_directory(out)) {
-    for (const char* file : {"result.vtu", "series.pvd", "needle.csv", "needle_transient.csv", "reactions.csv"})
+    for (const char* file : {"result.vtu", "series.pvd", "needle.csv", "needle_transient.csv", "reactions.csv", "reactions_transient.csv"})
       EXPECT_FALSE(fs::exists(out / file)) << file << " written for refused input";
     if (fs::exists(out / "summary.json")) {
       const json summary = test::read_json(out / "summary.json");

@@ -2,6 +2,8 @@
 // file, the plugin search path, and summary.json's plugins_loaded.
 #include <gtest/gtest.h>
 
+#include <sstream>
+
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -256,6 +258,40 @@ TEST(Cli, RelaxationThatRunsOutOfStepsIsReportedNotWritten) {
   check("dr-not-converged",
         {{"type", "dynamic_relaxation"}, {"load_steps", 100}, {"max_steps", 120}, {"tolerance", 1e-12}},
         "did not reach the steady state in 120 steps");
+}
+
+// reactions.csv under dynamic relaxation holds the relaxed states: with four relaxed increments on the smooth
+// load curve, the rows sit at exactly a quarter, half, three quarters and all of the load (not at the curve's
+// values at those points of the ramp: 0.10 at a quarter). The first row equals a run compressed a quarter as far
+// (the uniaxial compression is path independent), to the relaxations' tolerance (1e-5 of the displacement).
+TEST(Cli, ReactionsAreWrittenAtEachRelaxedLoad) {
+  auto top_rows = [](const fs::path& out) {
+    std::vector<double> fz;
+    std::istringstream text(test::read_text(out / "reactions.csv"));
+    std::string line;
+    while (std::getline(text, line))
+      if (line.find(",top,") != std::string::npos) fz.push_back(std::stod(line.substr(line.rfind(',') + 1)));
+    return fz;
+  };
+  auto run = [](const std::string& name, const std::function<void(json&)>& change) {
+    const auto file = variant(name, change);
+    const fs::path out = file.parent_path() / "out";
+    const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});
+    EXPECT_EQ(result.exit_code, 0) << result.output;
+    return out;
+  };
+  const fs::path two = run("relaxed-increments-4", [](json& s) { s["integrator"]["relaxed_increments"] = 4; });
+  const std::vector<double> rows = top_rows(two);
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_TRUE(fs::exists(two / "reactions_transient.csv"));
+  expect_contains(test::read_text(two / "reactions_transient.csv"), "time_s,set,transient_fx_N,transient_fy_N,transient_fz_N");
+  const fs::path half = run("quarter-compression", [](json& s) { s["boundaries"][1]["displacement"] = {0, 0, -0.00025}; });
+  const std::vector<double> half_rows = top_rows(half);
+  ASSERT_EQ(half_rows.size(), 1u);
+  EXPECT_NEAR(rows[0], half_rows[0], 1e-4 * std::abs(half_rows[0]));
+  const json summary = test::read_json(two / "summary.json");
+  EXPECT_NEAR(rows[3], summary["final_reactions_N"]["top"][2].get<double>(), 1e-9 * std::abs(rows[3]))
+      << summary["final_reactions_N"].dump();
 }
 
 // A boundary condition that pushes the three nodes at the top's centre 6 mm into the 10 mm cube: every
