@@ -66,22 +66,8 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     std::vector<Index> first_bad(static_cast<std::size_t>(model.team().size()), kNone);
     model.team().run([&](int thread) {
       const auto [begin, end] = ThreadTeam::share(n, thread, model.team().size());
-      for (auto ip = static_cast<Index>(begin); ip < end; ++ip) {
-        const Mat3& F = F_[ip];
-        const double r = std::cbrt(J_bar_[ip] / J_[ip]);
-        const Mat3 F_bar = r * F;
-        Mat3 S;
-        if (!model.ip_material(ip).stress(F_bar, S)) {
-          first_bad[static_cast<std::size_t>(thread)] = std::min(first_bad[static_cast<std::size_t>(thread)], ip);
-          pressure_[ip] = 0.0;
-          stress_[ip].setZero();
-          continue;
-        }
-        const Mat3 P_bar = F_bar * S;
-        const Mat3 F_inverse_transpose = cofactor_[ip] / J_[ip];
-        stress_[ip] = (weight[ip] * r) * (P_bar - (P_bar.cwiseProduct(F).sum() / 3.0) * F_inverse_transpose);
-        pressure_[ip] = weight[ip] * P_bar.cwiseProduct(F_bar).sum() / (3.0 * J_bar_[ip]);
-      }
+      Index& thread_bad = first_bad[static_cast<std::size_t>(thread)];
+      local_stresses(model, static_cast<Index>(begin), static_cast<Index>(end), thread_bad);
       model.team().barrier();
       average_at_nodes(model, pressure_, /*weighted=*/false, thread);
       model.team().barrier();
@@ -109,6 +95,44 @@ class NodalAverageTreatment final : public VolumetricTreatment {
 
  private:
   static constexpr Index kNone = std::numeric_limits<Index>::max();
+
+  // The local part of each point's stress and its pressure (see internal_forces) for points begin .. end - 1,
+  // the material law called on batches of consecutive points with one material (its vectorised stress_batch).
+  void local_stresses(const Model& model, Index begin, Index end, Index& first_bad) {
+    const auto& weight = model.ip_weights();
+    StressBatch batch{};
+    double r[StressBatch::kCapacity];
+    for (Index first = begin; first < end; first += batch.count) {
+      const Material& material = model.ip_material(first);
+      int count = 1;
+      while (count < StressBatch::kCapacity && first + count < end && &model.ip_material(first + count) == &material)
+        ++count;
+      batch.count = count;
+      for (int p = 0; p < StressBatch::kCapacity; ++p) {
+        r[p] = p < count ? std::cbrt(J_bar_[first + p] / J_[first + p]) : 1.0;
+        const Mat3 F_bar = p < count ? Mat3(r[p] * F_[first + p]) : Mat3::Identity();  // spare lanes: F = I
+        for (int c = 0; c < 9; ++c) batch.F[c][p] = F_bar(c / 3, c % 3);
+      }
+      material.stress_batch(batch);
+      for (int p = 0; p < count; ++p) {
+        const Index ip = first + p;
+        if (!batch.admissible[p]) {
+          first_bad = std::min(first_bad, ip);
+          pressure_[ip] = 0.0;
+          stress_[ip].setZero();
+          continue;
+        }
+        Mat3 S;
+        for (int c = 0; c < 9; ++c) S(c / 3, c % 3) = batch.S[c][p];
+        const Mat3& F = F_[ip];
+        const Mat3 F_bar = r[p] * F;
+        const Mat3 P_bar = F_bar * S;
+        const Mat3 F_inverse_transpose = cofactor_[ip] / J_[ip];
+        stress_[ip] = (weight[ip] * r[p]) * (P_bar - (P_bar.cwiseProduct(F).sum() / 3.0) * F_inverse_transpose);
+        pressure_[ip] = weight[ip] * P_bar.cwiseProduct(F_bar).sum() / (3.0 * J_bar_[ip]);
+      }
+    }
+  }
 
   // F, J, J F^-T and J_bar at every integration point; -1, or the first inadmissible point.
   Index averaged_dilatation(const Model& model, std::span<const double> u) {
