@@ -30,17 +30,18 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     const auto& tets = model.mesh().tets;
     const auto& ip_tet = model.ip_tets();
     const auto& weight = model.ip_weights();
-    offsets_.assign(nodes + 1, 0);
+    std::vector<std::int64_t>& offsets = node_points_.offsets;
+    offsets.assign(nodes + 1, 0);
     for (std::size_t ip = 0; ip < points; ++ip)
-      for (Index v : tets[ip_tet[ip]]) ++offsets_[v + 1];
-    for (std::size_t i = 0; i < nodes; ++i) offsets_[i + 1] += offsets_[i];
-    node_points_.resize(static_cast<std::size_t>(offsets_.back()));
-    std::vector<std::int64_t> next(offsets_.begin(), offsets_.end() - 1);
+      for (Index v : tets[ip_tet[ip]]) ++offsets[v + 1];
+    for (std::size_t i = 0; i < nodes; ++i) offsets[i + 1] += offsets[i];
+    node_points_.nodes.resize(static_cast<std::size_t>(offsets.back()));
+    std::vector<std::int64_t> next(offsets.begin(), offsets.end() - 1);
     node_weight_.assign(nodes, 0.0);
     // Filled in point order, so every node sums its points in the same order whatever the thread count.
     for (std::size_t ip = 0; ip < points; ++ip)
       for (Index v : tets[ip_tet[ip]]) {
-        node_points_[next[v]++] = static_cast<Index>(ip);
+        node_points_.nodes[next[v]++] = static_cast<Index>(ip);
         node_weight_[v] += weight[ip];
       }
     for (double& w : node_weight_)
@@ -52,6 +53,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     pressure_.resize(points);
     stress_.resize(points);
     node_value_.resize(nodes);
+    first_bad_.resize(static_cast<std::size_t>(model.team().size()));
   }
 
   // E = sum_q w_q W(F_bar_q), F_bar = r F with r = (J_bar / J)^(1/3), so det F_bar = J_bar. Its gradient has a
@@ -63,10 +65,10 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     if (const Index bad = averaged_dilatation(model, u); bad >= 0) return bad;
     const Index n = model.integration_point_count();
     const auto& weight = model.ip_weights();
-    std::vector<Index> first_bad(static_cast<std::size_t>(model.team().size()), kNone);
     model.team().run([&](int thread) {
       const auto [begin, end] = ThreadTeam::share(n, thread, model.team().size());
-      Index& thread_bad = first_bad[static_cast<std::size_t>(thread)];
+      Index& thread_bad = first_bad_[static_cast<std::size_t>(thread)];
+      thread_bad = kNone;
       local_stresses(model, static_cast<Index>(begin), static_cast<Index>(end), thread_bad);
       model.team().barrier();
       average_at_nodes(model, pressure_, /*weighted=*/false, thread);
@@ -79,7 +81,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
         stress_[ip] += (weight[ip] * pressure) * cofactor_[ip];
       }
     });
-    const Index bad = *std::min_element(first_bad.begin(), first_bad.end());
+    const Index bad = *std::min_element(first_bad_.begin(), first_bad_.end());
     if (bad != kNone) return bad;
     model.scatter_stresses(stress_, f);
     return -1;
@@ -164,19 +166,19 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     const auto [begin, end] = ThreadTeam::share(model.node_count(), thread, model.team().size());
     for (auto node = begin; node < end; ++node) {
       double sum = 0.0;
-      for (std::int64_t k = offsets_[node]; k < offsets_[node + 1]; ++k) {
-        const Index ip = node_points_[k];
+      for (std::int64_t k = node_points_.offsets[node]; k < node_points_.offsets[node + 1]; ++k) {
+        const Index ip = node_points_.nodes[k];
         sum += weighted ? weight[ip] * value[ip] : value[ip];
       }
       node_value_[node] = (weighted ? 1.0 : 0.25) * sum / node_weight_[node];
     }
   }
 
-  std::vector<std::int64_t> offsets_;  // node -> the integration points whose tet has it as a vertex
-  std::vector<Index> node_points_;
+  SupportRows node_points_;           // node -> the integration points whose tet has it as a vertex (no values)
   std::vector<double> node_weight_;  // sum of those points' weights
   std::vector<Mat3> F_, cofactor_, stress_;  // per integration point
   std::vector<double> J_, J_bar_, pressure_, node_value_;
+  std::vector<Index> first_bad_;  // per thread of the model's team
 };
 
 }  // namespace mtled
