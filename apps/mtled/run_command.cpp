@@ -136,9 +136,8 @@ class RunObserver final : public StepObserver {
 
   // needle.csv and reactions.csv rows at each state the relaxation reports steady.
   void record_equilibrium(const Simulation& simulation) {
-    const long relaxed = simulation.integrator().report().relaxation->relaxed_states;
-    if (relaxed == relaxed_states_) return;
-    relaxed_states_ = relaxed;
+    if (simulation.steady_states() == steady_states_) return;
+    steady_states_ = simulation.steady_states();
     if (needle_.is_open()) needle_row(simulation, needle_);
     if (reactions_.is_open()) reaction_rows(simulation, reactions_);
   }
@@ -162,7 +161,7 @@ class RunObserver final : public StepObserver {
   VtuFormat format_;
   bool relaxing_;
   long last_recorded_ = -1, last_snapshot_ = -1;
-  long relaxed_states_ = 0;
+  long steady_states_ = 0;
   OutputFolder::Stream needle_, needle_transient_, reactions_, reactions_transient_;
   std::vector<std::pair<double, std::string>> snapshots_;
   Progress progress_;
@@ -256,6 +255,7 @@ class SceneRun {
                                                   : 0.0;
     const IntegratorReport report = simulation_->integrator().report();
     summary_["integrator"] = to_json(report);
+    if (report.relaxation) summary_["integrator"]["relaxed_states"] = simulation_->steady_states();
     summary_["time_step_s"] = report.time_step;
   }
 

@@ -103,7 +103,6 @@ json to_json(const IntegratorReport& report) {
     out["tolerance"] = r->tolerance;
     out["lowest_frequency_rad_per_s"] = r->lowest_frequency;
     out["convergence_rate"] = r->convergence_rate;
-    out["relaxed_states"] = r->relaxed_states;
   }
   out.update(report.settings);
   return out;

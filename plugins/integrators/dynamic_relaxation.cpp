@@ -144,8 +144,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     r.time_step = h_;
     r.stable_time_step = unscaled_stable_;
     r.time_step_factor = factor_;
-    r.relaxation = RelaxationReport{converged_, error_bound_, relative_error_bound(), tolerance_, omega_min_, rho_,
-                                    relaxed_};
+    r.relaxation = RelaxationReport{converged_, error_bound_, relative_error_bound(), tolerance_, omega_min_, rho_};
     r.settings = {{"mass_scaling", mass_scaling_}, {"load_steps", load_steps_}, {"relaxed_increments", increments_}};
     return r;
   }
@@ -170,16 +169,15 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
 
   // Held at an increment's load: when the body is at rest there, count the equilibrium and go on loading (or
   // finish at the last).
-  void relax(const DiscreteSystem& system) {
-    check_convergence(system);
-    if (!steady_) return;
+  void relax(DiscreteSystem& system) {
+    if (!steady(system)) return;
+    system.steady_state_reached();
     ++relaxed_;
     if (relaxed_ >= increments_) {
       converged_ = true;
       return;
     }
     below_ = 0;
-    steady_ = false;
   }
 
   // The error bound as a fraction of the largest displacement (0 before there is any displacement).
@@ -206,7 +204,8 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     set_frequency(std::min(std::sqrt(stiffness / inertia), 2.0 / h_));
   }
 
-  void check_convergence(const DiscreteSystem& system) {
+  // Updates the error estimate; true once it has stayed under the tolerance for converged_steps steps.
+  bool steady(const DiscreteSystem& system) {
     const auto u = system.displacement();
     const auto u_previous = system.previous_displacement();
     double increment = 0.0, largest = 0.0;
@@ -217,7 +216,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     largest_displacement_ = largest;
     error_bound_ = rho_ < 1.0 ? increment * rho_ / (1.0 - rho_) : INFINITY;
     below_ = error_bound_ <= tolerance_ * largest ? below_ + 1 : 0;
-    steady_ = below_ >= converged_steps_;
+    return below_ >= converged_steps_;
   }
 
   double factor_;
@@ -237,7 +236,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   long below_ = 0;
   long ramp_step_ = 0;  // steps of the load ramp taken (the ramp holds while an increment relaxes)
   long relaxed_ = 0;    // increments relaxed to the steady state
-  bool steady_ = false, converged_ = false;
+  bool converged_ = false;
   std::vector<double> f_int_, f_int_previous_, f_ext_, u_next_;
 };
 

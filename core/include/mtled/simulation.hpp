@@ -45,6 +45,7 @@ class Simulation final : public DiscreteSystem, private StepControl {
   // Drivers update for (new_time, new_load_fraction), u_new is corrected to satisfy every constraint
   // (reactions = correction / alpha), then becomes the current state.
   void complete_step(std::span<double> u_new, double new_time, double new_load_fraction, double alpha) override;
+  void steady_state_reached() override { ++steady_states_; }
 
   const Model& model() const { return *model_; }
   double load_fraction() const { return load_.load_fraction; }
@@ -58,6 +59,8 @@ class Simulation final : public DiscreteSystem, private StepControl {
   const ConstraintSystem& constraints() const { return *constraint_system_; }
   double unscaled_stable_time_step() const { return unscaled_stable_time_step_; }
   long force_evaluations() const { return force_evaluations_; }
+  // Equilibria the integrator reported so far (one per relaxed load increment of dynamic relaxation).
+  long steady_states() const { return steady_states_; }
   // The step just completed, as the monitors see it.
   StepRecord last_step() const;
   // Interpolated displacement at every node (3 per node).
@@ -93,6 +96,7 @@ class Simulation final : public DiscreteSystem, private StepControl {
   double stable_time_step_ = 0.0;
   double unscaled_stable_time_step_ = 0.0;
   long force_evaluations_ = 0;
+  long steady_states_ = 0;
   std::vector<std::vector<Vec3>> previous_values_;  // prescribed values of the previous step, per set
   std::vector<double> u_before_;                    // the displacements a step before u_previous_
   std::vector<double> u_free_;  // this step's displacements before the constraint projection

@@ -38,6 +38,9 @@ class DiscreteSystem {
   // constraints correct u_new in place. `alpha` is the integrator's factor on M^-1 f in its update, so that the
   // constraint forces (reactions) are the correction over alpha.
   virtual void complete_step(std::span<double> u_new, double time, double load_fraction, double alpha) = 0;
+  // Called by a steady-state integrator right after complete_step when the state just completed is at rest at its
+  // load (a relaxed load increment): what the outputs record as an equilibrium.
+  virtual void steady_state_reached() {}
 };
 
 // A steady-state integrator's account of how far it is from the steady state.
@@ -48,7 +51,6 @@ struct RelaxationReport {
   double tolerance = 0.0;             // on relative_error_bound
   double lowest_frequency = 0.0;      // rad/s: the estimate the damping is tuned to
   double convergence_rate = 0.0;      // per step
-  long relaxed_states = 0;            // equilibria reached so far (one per relaxed load increment)
 };
 
 struct IntegratorReport {
