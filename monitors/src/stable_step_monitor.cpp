@@ -17,9 +17,10 @@ double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
   // the internal forces. Were K symmetric, the Ritz values would approach lambda_max from below and the estimate
   // could only overstate the stable step; variationally consistent integration makes K slightly unsymmetric,
   // and the estimate then lands within a few percent of 2 / sqrt(spectral radius) on either side
-  // (tests/solver/stable_step_test.cpp). A run is stopped only when its step exceeds the estimate by 5%, so a
-  // run that would finish is not stopped; beyond that margin the central-difference update (and dynamic
-  // relaxation's, whose limit is the same as its damping vanishes) is unstable. The iteration runs in the
+  // (tests/solver/stable_step_test.cpp). Hence the margins in check(): "stop" ends a run only when its step exceeds
+  // the estimate by 5%, so a run that would finish is not stopped (beyond that the central-difference update, and
+  // dynamic relaxation's, whose limit is the same as its damping vanishes, is unstable); "adapt" keeps the step
+  // at the integrator's margin below the estimate. The iteration runs in the
   // constrained subspace (every vector projected as the constraint correction projects each step's update,
   // ConstraintSystem::project_out): a mode that the constraints hold still, such as the tissue between the
   // driven points around a needle, cannot grow. The next check starts from this one's Ritz vector; the first,
