@@ -18,6 +18,7 @@ class GmshCylinder final : public MeshSource {
     declare_cylinder_axis(d);
     d.number("height").at_least(kMinLength).unit("m").doc("height along +z");
     declare_mesh_size(d, 7480);
+    declare_rim_refinement(d);
     d.example({{"radius", 0.015}, {"height", 0.017}, {"target_nodes", 2000}});
   }
 
@@ -34,6 +35,7 @@ class GmshCylinder final : public MeshSource {
     request.description = fmt::format("Gmsh cylinder, {}", describe(stack_));
     request.build_geometry = [this] { return build_cylinder_stack(stack_); };
     request.max_mesh_size = GeneratorRequest::SizeLimit{stack_.radius, "the radius"};
+    request.rim_curves = [this] { return cylinder_rim_curves(stack_); };
     return generate_tet_mesh(parameters_, request);
   }
 

@@ -29,6 +29,7 @@ class GmshLayeredCylinder final : public MeshSource {
         .unit("1")
         .doc("region name of each layer, bottom to top, one per layer, distinct; default layer1 .. layerN");
     declare_mesh_size(d, 32276);
+    declare_rim_refinement(d);
     d.example({{"radius", 0.0325}, {"layer_heights", {0.018, 0.009, 0.007}}, {"target_nodes", 2500}});
   }
 
@@ -54,6 +55,7 @@ class GmshLayeredCylinder final : public MeshSource {
     request.description = fmt::format("Gmsh layered cylinder, {}", describe(stack_));
     request.build_geometry = [this] { return build_cylinder_stack(stack_); };
     request.max_mesh_size = GeneratorRequest::SizeLimit{stack_.radius, "the radius"};
+    request.rim_curves = [this] { return cylinder_rim_curves(stack_); };
     return generate_tet_mesh(parameters_, request);
   }
 

@@ -4,6 +4,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "mtled/mesh.hpp"
 #include "mtled/parameters.hpp"
@@ -11,8 +12,12 @@
 
 namespace mtled {
 
-// Declares "target_nodes" (default `default_target_nodes`), "mesh_size" and "jitter" on a generator.
+// Declares "target_nodes" (default `default_target_nodes`), "mesh_size", "jitter" and the refinement along a
+// segment (refine_from, refine_to, refine_ratio, refine_distance, refine_transition) on a generator.
 void declare_mesh_size(ComponentDeclaration& declaration, long default_target_nodes);
+
+// Declares "refine_rims" on a generator that sets GeneratorRequest::rim_curves.
+void declare_rim_refinement(ComponentDeclaration& declaration);
 
 struct GeneratorRequest {
   std::string component;    // the generator's name, for log lines and messages
@@ -30,6 +35,9 @@ struct GeneratorRequest {
     std::string what;  // "the radius"
   };
   std::optional<SizeLimit> max_mesh_size;
+  // Generators whose shape has rims (a cylinder's circular edges) name the curves "refine_rims" refines along;
+  // called after build_geometry. Empty: the generator declares no refine_rims.
+  std::function<std::vector<int>()> rim_curves;
   // Where a failure is reported (InputError's `where`): the block's pointer unless a file is to blame.
   std::optional<std::string> failure_where;
   std::string failure_advice = "check the dimensions, or try another target_nodes or mesh_size";
