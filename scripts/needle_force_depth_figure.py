@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Draws docs/figures/needle_force_depth.svg from the folder scripts/needle_force_curve.sh writes: the needle
 force against depth in equilibrium (needle.csv, 10 relaxed increments), the relaxation's transient along the way
-(needle_transient.csv) and the runs stopped and relaxed at each depth. Usage:
+(needle_transient.csv) and the runs stopped and relaxed at each depth, with the load ramped 4 times slower than
+the scene's, and the transient of the scene as shipped (one relaxation at 15 mm: the old needle.csv). Usage:
     python3 scripts/needle_force_depth_figure.py runs/needle-force-curve docs/figures/needle_force_depth.svg
 """
 import csv
@@ -13,7 +14,7 @@ curve = [(1e3 * float(r["depth_m"]), float(r["force_N"])) for r in csv.DictReade
 transient = [(1e3 * float(r["depth_m"]), float(r["transient_force_N"]))
              for r in csv.DictReader(open(f"{folder}/curve/needle_transient.csv"))]
 one_shot = [(1e3 * float(r["depth_m"]), float(r["transient_force_N"]))
-            for r in csv.DictReader(open(f"{folder}/depth10/needle_transient.csv"))]
+            for r in csv.DictReader(open(f"{folder}/default/needle_transient.csv"))]
 alone = []
 for k in range(1, len(curve) + 1):
     summary = json.load(open(f"{folder}/depth{k}/summary.json"))
@@ -60,10 +61,10 @@ for a, b in curve:
     out.append(f'<circle cx="{x(a):.1f}" cy="{y(b):.1f}" r="3.5" fill="#1f77b4"/>')
 for a, b in alone:
     out.append(f'<path d="M{x(a) - 5:.1f},{y(b) - 5:.1f} l10,10 m0,-10 l-10,10" stroke="black" stroke-width="1.5"/>')
-legend = [("#1f77b4", "", "needle.csv: in equilibrium at each depth (10 relaxed increments)"),
+legend = [("#1f77b4", "", "needle.csv: in equilibrium at each depth (10 relaxed increments, ramp 4x slower)"),
           ("black", "x", "a run stopped at that depth and relaxed there"),
           ("#d62728", "6 4", "the old needle.csv: the transient of one relaxation at 15 mm"),
-          ("#ff9896", "", "needle_transient.csv of the 10-increment run")]
+          ("#ff9896", "", "needle_transient.csv of that run")]
 for i, (colour, dash, text) in enumerate(legend):
     ly = top + 8 + 18 * i
     if dash == "x":

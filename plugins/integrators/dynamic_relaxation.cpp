@@ -50,7 +50,9 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     d.integer("relaxed_increments").unit("1").at_least(1).defaults(1).doc(
         "relax to the steady state at this many equally spaced loads (1/N, 2/N, ... of the full load, each reached "
         "along the load curve, held while the body relaxes), so that needle.csv and reactions.csv hold the forces "
-        "in equilibrium at each; 1 relaxes only at full load");
+        "in equilibrium at each; 1 relaxes only at full load. Where the answer depends on the loading path (the "
+        "kinematic needle captures tissue as it advances), ramp slowly enough (load_steps) that each row equals a run "
+        "relaxed at that load: on the default scene 4 x its load_steps (docs/validation.md)");
     d.integer("damping_update_steps").unit("1").at_least(1).defaults(10).doc(
         "re-estimate the lowest eigenfrequency (and so the damping) every this many steps");
     d.example({{"load_steps", 200}, {"tolerance", 1e-5}});
