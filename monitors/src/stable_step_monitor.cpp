@@ -106,7 +106,7 @@ void StableStepMonitor::check(const StepRecord& step) {
     const double lowered = margin * last_stable_step_;
     step.control->lower_stable_time_step(lowered / step.time_step_factor);
     ++lowered_;
-    lowest_step_ = lowest_step_ > 0.0 ? std::min(lowest_step_, lowered) : lowered;
+    lowest_step_ = lowered;  // below the step in use, which only ever falls: the last is the lowest
     return;
   }
   constexpr double kMargin = 1.05;

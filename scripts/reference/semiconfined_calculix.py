@@ -35,6 +35,8 @@ FRACTIONS = (0.25, 0.5, 0.75, 1.0)  # of the stroke: 5, 10, 15, 20%
 # and BULK_SIZE. Halving BULK_SIZE and GROWTH (0.5 mm, 0.125) moves the forces at 5 to 15% by at most 1e-5 N
 # (at the corner size 0.05 mm; at 20% that mesh stops short in Newton's method).
 BULK_SIZE, GROWTH = 0.001, 0.25
+# *STATIC of the compressions: first increment, whole step, smallest and largest increment (fractions of the stroke).
+COMPRESSION_STEP = "0.05, 1.0, 1e-6, 0.05"
 # CalculiX expands an axisymmetric model into a 2-degree sector: its reactions are 1/180 of the whole ring's.
 SECTOR = 180.0
 
@@ -155,7 +157,7 @@ def run_3d(h):
         nodes, elements, sets = read_gmsh_inp(gmsh_inp(folder, geo, 3), "C3D20")
         deck = os.path.join(folder, "compression.inp")
         write_deck(deck, nodes, elements, "C3D20R", {"BOTTOM": sets["bottom"], "TOP": sets["top"]},
-                   f"BOTTOM, 1, 3\nTOP, 1, 2\nTOP, 3, 3, {-STROKE}\n", "0.05, 1.0, 1e-6, 0.05", FRACTIONS)
+                   f"BOTTOM, 1, 3\nTOP, 1, 2\nTOP, 3, 3, {-STROKE}\n", COMPRESSION_STEP, FRACTIONS)
         return len(nodes), len(elements), compression_forces(deck, 1.0, 2)
 
 
@@ -177,7 +179,7 @@ def run_axisymmetric(corner):
         at = lambda axis, value: [n for n, xyz in nodes.items() if abs(xyz[axis] - value) < 1e-9]
         deck = os.path.join(folder, "compression.inp")
         write_deck(deck, nodes, elements, "CAX8", {"BOTTOM": at(1, 0.0), "TOP": at(1, HEIGHT), "AXIS": at(0, 0.0)},
-                   f"BOTTOM, 1, 2\nAXIS, 1, 1\nTOP, 1, 1\nTOP, 2, 2, {-STROKE}\n", "0.05, 1.0, 1e-6, 0.05",
+                   f"BOTTOM, 1, 2\nAXIS, 1, 1\nTOP, 1, 1\nTOP, 2, 2, {-STROKE}\n", COMPRESSION_STEP,
                    FRACTIONS)
         return len(nodes), len(elements), compression_forces(deck, SECTOR, 1)
 

@@ -35,7 +35,7 @@ class GmshCylinder final : public MeshSource {
     request.description = fmt::format("Gmsh cylinder, {}", describe(stack_));
     request.build_geometry = [this] { return build_cylinder_stack(stack_); };
     request.max_mesh_size = GeneratorRequest::SizeLimit{stack_.radius, "the radius"};
-    request.rim_curves = [this] { return cylinder_rim_curves(stack_); };
+    request.rim_curves = cylinder_rim_curves;
     return generate_tet_mesh(parameters_, request);
   }
 

@@ -67,13 +67,10 @@ GeometryMeasure build_cylinder_stack(const CylinderStack& stack) {
   return occ_geometry_measure();
 }
 
-std::vector<int> cylinder_rim_curves(const CylinderStack& stack) {
-  double top = stack.base_center[2];
-  for (const double height : stack.layer_heights) top += height;
-  const double tolerance = 1e-6 * *std::min_element(stack.layer_heights.begin(), stack.layer_heights.end());
+std::vector<int> cylinder_rim_curves() {
   std::vector<int> curves;
-  for (const double z : {stack.base_center[2], top})
-    for (const int disk : surfaces_in_plane(2, z, tolerance)) {
+  for (const char* face : {"bottom", "top"})
+    for (const int disk : named_group_entities(2, face)) {
       gmsh::vectorpair boundary;
       gmsh_checked([&] { gmsh::model::getBoundary({{2, disk}}, boundary, false, false, false); });
       for (const auto& [dim, tag] : boundary) curves.push_back(std::abs(tag));

@@ -24,8 +24,9 @@ void declare_cylinder_axis(ComponentDeclaration& declaration);
 // k and k + 1, "interface<k>".
 GeometryMeasure build_cylinder_stack(const CylinderStack& stack);
 
-// Tags of the curves bounding the bottom and the top face: the two rims where they meet the side.
-std::vector<int> cylinder_rim_curves(const CylinderStack& stack);
+// Tags of the curves bounding the "bottom" and "top" faces that build_cylinder_stack named: the two rims where
+// they meet the side.
+std::vector<int> cylinder_rim_curves();
 
 // "radius 0.015 m, layers [0.018, 0.009, 0.007] m, base centre [0, 0, 0] m".
 std::string describe(const CylinderStack& stack);

@@ -60,6 +60,23 @@ void add_named_group(int dim, const std::vector<int>& tags, const std::string& n
   });
 }
 
+std::vector<int> named_group_entities(int dim, const std::string& name) {
+  std::vector<int> tags;
+  gmsh_checked([&] {
+    gmsh::vectorpair groups;
+    gmsh::model::getPhysicalGroups(groups, dim);
+    for (const auto& [group_dim, group] : groups) {
+      std::string group_name;
+      gmsh::model::getPhysicalName(group_dim, group, group_name);
+      if (group_name != name) continue;
+      std::vector<int> entities;
+      gmsh::model::getEntitiesForPhysicalGroup(group_dim, group, entities);
+      tags.insert(tags.end(), entities.begin(), entities.end());
+    }
+  });
+  return tags;
+}
+
 TetMesh extract_tet_mesh() {
   TetMesh mesh;
   gmsh_checked([&] {

@@ -29,6 +29,9 @@ std::vector<int> entity_tags(int dim);
 // A physical group named `name` over the entities `tags` of dimension `dim` (3: a region, 2: a node set).
 void add_named_group(int dim, const std::vector<int>& tags, const std::string& name);
 
+// Tags of the entities of dimension `dim` in the physical group named `name` (empty when there is none).
+std::vector<int> named_group_entities(int dim, const std::string& name);
+
 // The current model's mesh: every node; the linear tets of each physical volume group, one region per
 // group in tag order; the nodes of each physical surface group as a node set of the same name.
 TetMesh extract_tet_mesh();
