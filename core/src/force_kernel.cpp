@@ -88,25 +88,30 @@ HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double*
 #endif
 
 // One row's blocks as raw pointers, for loops that step through them (in locals: the compiler cannot tell that
-// the kernel's stores do not move the rows' arrays, and would reload them after every store).
+// the kernel's stores do not move the rows' arrays, and would reload them after every store). The loops step the
+// two pointers and stop at records_end, which keeps one counter fewer than a block index.
 struct RowBlocks {
-  std::int64_t count;
   const double* gradients;  // 3 kBlock per block
   const Index* records;     // kBlock per block
+  const Index* records_end;
 };
 HWY_INLINE RowBlocks row_blocks(const GradientRows& rows, Index row) {
   const std::int64_t begin = rows.block_begin(row);
-  return {rows.block_end(row) - begin, rows.block_gradients(begin), rows.block_records(begin)};
+  return {rows.block_gradients(begin), rows.block_records(begin), rows.block_records(rows.block_end(row))};
 }
 
-// Asks the caches for one row (its gradients and record offsets).
+// Asks the caches for one row (its gradients and record offsets), two 64-byte lines per turn of the loop (the
+// loop's own instructions cost as much as the prefetches). A row's gradients are 96 bytes per block, so the
+// second line of the last turn may lie past the row: a prefetch never faults.
+HWY_INLINE void prefetch_lines(const void* begin, const void* end) {
+  for (const char* line = static_cast<const char*>(begin); line < static_cast<const char*>(end); line += 128) {
+    hwy::Prefetch(line);
+    hwy::Prefetch(line + 64);
+  }
+}
 HWY_INLINE void prefetch_row(const GradientRows& rows, Index row) {
-  const auto* g = reinterpret_cast<const char*>(rows.block_gradients(rows.block_begin(row)));
-  const auto* g_end = reinterpret_cast<const char*>(rows.block_gradients(rows.block_end(row)));
-  for (; g < g_end; g += 64) hwy::Prefetch(g);
-  const auto* r = reinterpret_cast<const char*>(rows.block_records(rows.block_begin(row)));
-  const auto* r_end = reinterpret_cast<const char*>(rows.block_records(rows.block_end(row)));
-  for (; r < r_end; r += 64) hwy::Prefetch(r);
+  prefetch_lines(rows.block_gradients(rows.block_begin(row)), rows.block_gradients(rows.block_end(row)));
+  prefetch_lines(rows.block_records(rows.block_begin(row)), rows.block_records(rows.block_end(row)));
 }
 
 void Gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch) {
@@ -125,8 +130,7 @@ void Gather(const GradientRows& rows, const double* u4, Index first, Index prefe
     for (auto& v : f) v = hn::Zero(d);
     const RowBlocks row = row_blocks(rows, first + p);
     const double* g = row.gradients;
-    const Index* records = row.records;
-    for (std::int64_t b = 0; b < row.count; ++b, g += 3 * kBlock, records += kBlock) {
+    for (const Index* records = row.records; records != row.records_end; records += kBlock, g += 3 * kBlock) {
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
         V u[3];
         load_records(d, u4, records + j, u[0], u[1], u[2]);
@@ -165,8 +169,7 @@ void Scatter(const GradientRows& rows, const double* xi4, const double* m3, Inde
     for (int k = 0; k < 3; ++k) mean[k] = hn::Set(d, m3[3 * static_cast<std::size_t>(first + p) + k]);
     const RowBlocks row = row_blocks(rows, first + p);
     const double* g = row.gradients;
-    const Index* records = row.records;
-    for (std::int64_t b = 0; b < row.count; ++b, g += 3 * kBlock, records += kBlock) {
+    for (const Index* records = row.records; records != row.records_end; records += kBlock, g += 3 * kBlock) {
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
         V grad[3];
         load_records(d, xi4, records + j, grad[0], grad[1], grad[2]);
