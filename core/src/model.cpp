@@ -306,20 +306,14 @@ std::vector<Vec3> Model::solve_integration_correction(std::vector<Vec3> r) const
   const auto start = std::chrono::steady_clock::now();
   const Index n = node_count(), points = integration_point_count();
   // Each node's integration points (the transpose of the rows), for the product in node order.
-  std::vector<std::int64_t> first(static_cast<std::size_t>(n) + 1, 0);
-  for (Index ip = 0; ip < points; ++ip)
-    for (int k = 0; k < ip_rows_.size(ip); ++k) ++first[static_cast<std::size_t>(ip_rows_.node(ip, k)) + 1];
-  for (Index i = 0; i < n; ++i) first[i + 1] += first[i];
-  std::vector<Index> node_points(static_cast<std::size_t>(first[n]));
-  {
-    std::vector<std::int64_t> next(first.begin(), first.end() - 1);
-    for (Index ip = 0; ip < points; ++ip)
-      for (int k = 0; k < ip_rows_.size(ip); ++k) node_points[next[ip_rows_.node(ip, k)]++] = ip;
-  }
+  const SupportRows node_points = transpose_rows(points, n, [&](Index ip, auto&& add) {
+    for (int k = 0; k < ip_rows_.size(ip); ++k) add(ip_rows_.node(ip, k));
+  });
+  const std::vector<std::int64_t>& first = node_points.offsets;
   std::vector<double> W(static_cast<std::size_t>(n), 0.0), diagonal(static_cast<std::size_t>(n), 0.0);
   for (Index i = 0; i < n; ++i)
     for (auto e = first[i]; e < first[i + 1]; ++e) {
-      const Index ip = node_points[e];
+      const Index ip = node_points.nodes[e];
       W[i] += ip_weight_[ip];
       diagonal[i] += ip_weight_[ip] * (1.0 - 1.0 / ip_rows_.size(ip));
     }
@@ -336,7 +330,7 @@ std::vector<Vec3> Model::solve_integration_correction(std::vector<Vec3> r) const
 #pragma omp parallel for schedule(static)
     for (Index i = 0; i < n; ++i) {
       Vec3 sum = Vec3::Zero();
-      for (auto e = first[i]; e < first[i + 1]; ++e) sum += weighted_mean[node_points[e]];
+      for (auto e = first[i]; e < first[i + 1]; ++e) sum += weighted_mean[node_points.nodes[e]];
       y[i] = W[i] * x[i] - sum;
     }
   };

@@ -30,20 +30,13 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     const auto& tets = model.mesh().tets;
     const auto& ip_tet = model.ip_tets();
     const auto& weight = model.ip_weights();
-    std::vector<std::int64_t>& offsets = node_points_.offsets;
-    offsets.assign(nodes + 1, 0);
-    for (std::size_t ip = 0; ip < points; ++ip)
-      for (Index v : tets[ip_tet[ip]]) ++offsets[v + 1];
-    for (std::size_t i = 0; i < nodes; ++i) offsets[i + 1] += offsets[i];
-    node_points_.nodes.resize(static_cast<std::size_t>(offsets.back()));
-    std::vector<std::int64_t> next(offsets.begin(), offsets.end() - 1);
+    // In point order, so every node sums its points in the same order whatever the thread count.
+    node_points_ = transpose_rows(static_cast<Index>(points), static_cast<Index>(nodes), [&](Index ip, auto&& add) {
+      for (Index v : tets[ip_tet[ip]]) add(v);
+    });
     node_weight_.assign(nodes, 0.0);
-    // Filled in point order, so every node sums its points in the same order whatever the thread count.
     for (std::size_t ip = 0; ip < points; ++ip)
-      for (Index v : tets[ip_tet[ip]]) {
-        node_points_.nodes[next[v]++] = static_cast<Index>(ip);
-        node_weight_[v] += weight[ip];
-      }
+      for (Index v : tets[ip_tet[ip]]) node_weight_[v] += weight[ip];
     for (double& w : node_weight_)
       if (!(w > 0.0)) w = 1.0;  // a vertex of no tet: never read
     F_.resize(points);

@@ -45,6 +45,18 @@ double max_abs(const std::vector<double>& v) {
   return m;
 }
 
+TEST(SupportRows, TransposeListsEachColumnsRowsInRowOrder) {
+  // rows 0..3 name columns {2, 0}, {0, 3}, {}, {2}; columns 1 and 4 are named by none.
+  const std::vector<std::vector<Index>> relation = {{2, 0}, {0, 3}, {}, {2}};
+  const SupportRows t = transpose_rows(4, 5, [&](Index row, auto&& add) {
+    for (Index column : relation[static_cast<std::size_t>(row)]) add(column);
+  });
+  EXPECT_EQ(t.offsets, (std::vector<std::int64_t>{0, 2, 2, 4, 5, 5}));
+  EXPECT_EQ(t.nodes, (std::vector<Index>{0, 1, 0, 3, 1}));
+  EXPECT_EQ(t.rows(), 5);
+  EXPECT_EQ(t.size(1), 0);
+}
+
 TEST(Model, LumpedMassIsTheBodyMass) {
   const auto model = make_model();
   const auto mass = model->lumped_mass();
