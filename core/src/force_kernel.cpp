@@ -141,8 +141,8 @@ void Gather(const GradientRows& rows, const double* u4, Index first, Index prefe
     }
     double sums[9];
     sum_lanes(d, f, sums);
-    // The identity on the diagonal only: x + 0.0 is not x for x = -0.0, so the compiler would keep six additions.
-    for (int c = 0; c < 9; ++c) batch.F[c][p] = c % 4 == 0 ? 1.0 + sums[c] : sums[c];
+    // The identity's nonzero entries only: x + 0.0 is not x for x = -0.0, so the compiler would keep six additions.
+    for (int c = 0; c < 9; ++c) batch.F[c][p] = kIdentity[c] == 0.0 ? sums[c] : kIdentity[c] + sums[c];
   }
 }
 

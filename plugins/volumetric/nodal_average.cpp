@@ -35,8 +35,9 @@ class NodalAverageTreatment final : public VolumetricTreatment {
       for (Index v : tets[ip_tet[ip]]) add(v);
     });
     node_weight_.assign(nodes, 0.0);
-    for (std::size_t ip = 0; ip < points; ++ip)
-      for (Index v : tets[ip_tet[ip]]) node_weight_[v] += weight[ip];
+    for (std::size_t node = 0; node < nodes; ++node)
+      for (std::int64_t k = node_points_.offsets[node]; k < node_points_.offsets[node + 1]; ++k)
+        node_weight_[node] += weight[node_points_.nodes[k]];
     for (double& w : node_weight_)
       if (!(w > 0.0)) w = 1.0;  // a vertex of no tet: never read
     F_.resize(points);
