@@ -1,8 +1,7 @@
 // The internal-force kernel (Model::internal_forces) on the default scene's cloud (the paper's coarse grid of
 // the small sample, about 7,500 nodes and 38,000 integration points), for 1 and 2 threads. Counters:
 // integration-point updates per second and the kernel's memory traffic per second, counted as the bytes the
-// kernel must stream once per call (support rows: node index and 3 gradients per entry; per integration
-// point: weight, offsets, material index; displacements read and forces written per support entry).
+// kernel must move once per call (Model::streamed_bytes_per_force_evaluation).
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
@@ -25,15 +24,16 @@ struct Setup {
   std::unique_ptr<Simulation> simulation;
 };
 
-// One simulation per thread count: the model sizes its per-thread force buffers when it is built.
-Simulation& simulation_for(int threads) {
-  static std::map<int, Setup> setups;
-  auto& s = setups[threads];
+// One simulation per thread count and row precision: the model sizes its thread team when it is built.
+Simulation& simulation_for(int threads, const std::string& precision) {
+  static std::map<std::pair<int, std::string>, Setup> setups;
+  auto& s = setups[{threads, precision}];
   if (!s.simulation) {
     // MTLED_SIMD=avx2 (or sse4, baseline, ...) times another instruction set than the CPU's best.
     if (const char* simd = std::getenv("MTLED_SIMD")) simd::use(simd);
     omp_set_num_threads(threads);
     SceneDocument document = read_scene(MTLED_SOURCE_DIR "/share/scenes/needle_small_sample.json");
+    document.root["discretisation"]["precision"] = precision;
     s.catalog = std::make_unique<PluginCatalog>(plugin_search_path({}, scene_plugin_paths(document)));
     const Scene scene = validate_scene(std::move(document), *s.catalog);
     s.simulation = std::make_unique<Simulation>(scene, *s.catalog);
@@ -41,9 +41,9 @@ Simulation& simulation_for(int threads) {
   return *s.simulation;
 }
 
-void internal_forces(benchmark::State& state) {
+void internal_forces(benchmark::State& state, const std::string& precision) {
   const int threads = static_cast<int>(state.range(0));
-  Simulation& simulation = simulation_for(threads);
+  Simulation& simulation = simulation_for(threads, precision);
   const Model& model = simulation.model();
   const std::size_t dofs = 3 * static_cast<std::size_t>(model.node_count());
   // A smooth field of about 1% strain: every integration point does real work.
@@ -56,25 +56,26 @@ void internal_forces(benchmark::State& state) {
     benchmark::DoNotOptimize(model.internal_forces(u, f));
     benchmark::ClobberMemory();
   }
-  const auto& rows = model.ip_supports();
-  const double entries = static_cast<double>(rows.entries());
+  const double entries = static_cast<double>(model.ip_supports().entries());
   const double ips = static_cast<double>(model.integration_point_count());
-  const double bytes = entries * (sizeof(Index) + 3 * sizeof(double))  // support rows
-                       + entries * 3 * sizeof(double) * 2               // u read, f accumulated
-                       + ips * (2 * sizeof(double) + sizeof(std::int64_t));
+  const auto bytes = static_cast<double>(model.streamed_bytes_per_force_evaluation());
   state.counters["ip_updates_per_s"] = benchmark::Counter(ips, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["bytes_per_s"] = benchmark::Counter(bytes, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["support_mean"] = entries / ips;
   state.counters["integration_points"] = ips;
   state.SetLabel(simd::current());
 }
-void BM_InternalForces(benchmark::State& state) { internal_forces(state); }
+void BM_InternalForces(benchmark::State& state) { internal_forces(state, "double"); }
 BENCHMARK(BM_InternalForces)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Gradients stored in single precision (/discretisation/precision "single"): half the rows' bytes.
+void BM_InternalForcesSingle(benchmark::State& state) { internal_forces(state, "single"); }
+BENCHMARK(BM_InternalForcesSingle)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The same on the portable baseline instruction set (no SIMD): what the vectorisation gives.
 void BM_InternalForcesBaseline(benchmark::State& state) {
   simd::use("baseline");
-  internal_forces(state);
+  internal_forces(state, "double");
   simd::use("best");
 }
 BENCHMARK(BM_InternalForcesBaseline)->Arg(1)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -38,7 +38,8 @@ Mat3 deformation_gradient_at(const GradientRows& rows, Index ip, const double* u
 
 }  // namespace
 
-void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index padding_node) {
+void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index padding_node, RowPrecision precision) {
+  precision_ = precision;
   block_offsets_.assign(supports.size() + 1, 0);
   sizes_.resize(supports.size());
   entries_ = 0;
@@ -48,7 +49,9 @@ void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index
     block_offsets_[r + 1] = block_offsets_[r] + (sizes_[r] + kBlock - 1) / kBlock;
   }
   records_.assign(static_cast<std::size_t>(kBlock * blocks()), 4 * padding_node);
-  gradients_.assign(static_cast<std::size_t>(3 * kBlock * blocks()), 0.0);
+  const auto values = static_cast<std::size_t>(3 * kBlock * blocks());
+  double_gradients_.assign(precision == RowPrecision::double_precision ? values : 0, 0.0);
+  single_gradients_.assign(precision == RowPrecision::single_precision ? values : 0, 0.0f);
   for (std::size_t r = 0; r < supports.size(); ++r)
     for (std::size_t k = 0; k < supports[r].size(); ++k)
       records_[position(static_cast<Index>(r), static_cast<int>(k))] = 4 * supports[r][k];
@@ -56,13 +59,65 @@ void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index
 
 void GradientRows::set_gradient(Index row, int k, const Vec3& gradient) {
   const std::size_t at = position(row, k), block = at / kBlock, lane = at % kBlock;
-  for (int c = 0; c < 3; ++c) gradients_[(3 * block + c) * kBlock + lane] = gradient[c];
+  for (int c = 0; c < 3; ++c) {
+    const std::size_t i = (3 * block + c) * kBlock + lane;
+    if (precision_ == RowPrecision::single_precision)
+      single_gradients_[i] = static_cast<float>(gradient[c]);
+    else
+      double_gradients_[i] = gradient[c];
+  }
 }
 
 Vec3 GradientRows::gradient(Index row, int k) const {
   const std::size_t at = position(row, k), block = at / kBlock, lane = at % kBlock;
-  const double* g = gradients_.data() + 3 * kBlock * block + lane;
-  return {g[0], g[kBlock], g[2 * kBlock]};
+  const std::size_t i = 3 * kBlock * block + lane;
+  if (precision_ == RowPrecision::single_precision)
+    return {single_gradients_[i], single_gradients_[i + kBlock], single_gradients_[i + 2 * kBlock]};
+  return {double_gradients_[i], double_gradients_[i + kBlock], double_gradients_[i + 2 * kBlock]};
+}
+
+void TestGradientRows::assign(std::vector<std::int64_t> offsets, RowPrecision precision) {
+  precision_ = precision;
+  offsets_ = std::move(offsets);
+  const auto n = static_cast<std::size_t>(entries());
+  double_entries_.assign(precision == RowPrecision::double_precision ? n : 0, TestGradientEntry<double>{});
+  single_entries_.assign(precision == RowPrecision::single_precision ? n : 0, TestGradientEntry<float>{});
+}
+
+void TestGradientRows::set(std::int64_t entry, Index point, const Vec3& gradient) {
+  const auto record = static_cast<std::int32_t>(kStressRecord * point);
+  const auto e = static_cast<std::size_t>(entry);
+  if (precision_ == RowPrecision::single_precision)
+    single_entries_[e] = {{static_cast<float>(gradient[0]), static_cast<float>(gradient[1]), static_cast<float>(gradient[2])}, record};
+  else
+    double_entries_[e] = {{gradient[0], gradient[1], gradient[2]}, record};
+}
+
+Index TestGradientRows::point(std::int64_t entry) const {
+  const auto e = static_cast<std::size_t>(entry);
+  return (precision_ == RowPrecision::single_precision ? single_entries_[e].point_record
+                                                       : double_entries_[e].point_record) / kStressRecord;
+}
+
+Vec3 TestGradientRows::gradient(std::int64_t entry) const {
+  const auto e = static_cast<std::size_t>(entry);
+  if (precision_ == RowPrecision::single_precision) {
+    const auto& g = single_entries_[e].gradient;
+    return {g[0], g[1], g[2]};
+  }
+  const auto& g = double_entries_[e].gradient;
+  return {g[0], g[1], g[2]};
+}
+
+std::vector<Index> TestGradientRows::balanced_shares(int parts) const {
+  std::vector<Index> first(static_cast<std::size_t>(parts) + 1, nodes());
+  first[0] = 0;
+  for (int k = 1; k < parts; ++k) {
+    const std::int64_t target = entries() * k / parts;
+    first[static_cast<std::size_t>(k)] =
+        static_cast<Index>(std::lower_bound(offsets_.begin(), offsets_.end() - 1, target) - offsets_.begin());
+  }
+  return first;
 }
 
 Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
@@ -87,17 +142,17 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   node_search_ = std::make_unique<PointSearch>(mesh_.points);
 
   build_integration_points(options.integration_points_per_tet);
-  build_supports();
+  build_supports(options.precision);
   build_time_steps();
-  const std::size_t padded = 4 * (static_cast<std::size_t>(node_count()) + 1);
-  xi_.assign(padded, 0.0);
-  xi_mean_.assign(3 * static_cast<std::size_t>(integration_point_count()), 0.0);
+  xi_.assign(static_cast<std::size_t>(node_count()), Vec3::Zero());
+  xi_mean_.assign(static_cast<std::size_t>(integration_point_count()), Vec3::Zero());
   if (options.consistent_integration) build_integration_correction();
-  padded_u_.assign(padded, 0.0);
+  build_test_gradients();
+  padded_u_.assign(4 * (static_cast<std::size_t>(node_count()) + 1), 0.0);
+  stress_records_.assign(static_cast<std::size_t>(kStressRecord) * static_cast<std::size_t>(integration_point_count()), 0.0);
   team_ = std::make_unique<ThreadTeam>(options.threads > 0 ? options.threads : omp_get_max_threads());
-  thread_forces_.resize(static_cast<std::size_t>(team_->size()));
-  for (auto& buffer : thread_forces_) buffer.assign(padded, 0.0);
-  thread_first_bad_.assign(thread_forces_.size(), std::numeric_limits<Index>::max());
+  node_shares_ = test_rows_.balanced_shares(team_->size());
+  thread_first_bad_.assign(static_cast<std::size_t>(team_->size()), std::numeric_limits<Index>::max());
   volumetric_ = std::move(options.volumetric);
   if (volumetric_) volumetric_->setup(*this);
 }
@@ -206,10 +261,10 @@ double Model::evaluate_rows(const std::vector<Vec3>& points, const std::vector<s
   return *std::min_element(min_condition.begin(), min_condition.end());
 }
 
-void Model::build_supports() {
+void Model::build_supports(RowPrecision precision) {
   {
     const auto supports = find_supports(ip_position_, "integration point");
-    ip_rows_.assign(supports, node_count());
+    ip_rows_.assign(supports, node_count(), precision);
     ip_stats_.min_reciprocal_condition =
         evaluate_rows(ip_position_, supports, true, "integration point",
                       [&](Index r, int k, double, const Vec3& gradient) { ip_rows_.set_gradient(r, k, gradient); });
@@ -285,15 +340,28 @@ void Model::build_integration_correction() {
   }
   for (Index ip = 0; ip < integration_point_count(); ++ip)
     for (int k = 0; k < ip_rows_.size(ip); ++k) residual[ip_rows_.node(ip, k)] -= ip_weight_[ip] * ip_rows_.gradient(ip, k);
-  const std::vector<Vec3> xi = solve_integration_correction(residual);
-  for (Index i = 0; i < node_count(); ++i)
-    for (int d = 0; d < 3; ++d) xi_[4 * static_cast<std::size_t>(i) + d] = xi[i][d];
+  xi_ = solve_integration_correction(residual);
   for (Index ip = 0; ip < integration_point_count(); ++ip) {
     Vec3 mean = Vec3::Zero();
-    for (int k = 0; k < ip_rows_.size(ip); ++k) mean += xi[ip_rows_.node(ip, k)];
-    mean /= ip_rows_.size(ip);
-    for (int d = 0; d < 3; ++d) xi_mean_[3 * static_cast<std::size_t>(ip) + d] = mean[d];
+    for (int k = 0; k < ip_rows_.size(ip); ++k) mean += xi_[ip_rows_.node(ip, k)];
+    xi_mean_[ip] = mean / ip_rows_.size(ip);
   }
+}
+
+void Model::build_test_gradients() {
+  const Index points = integration_point_count();
+  const SupportRows node_points = transpose_rows(points, node_count(), [&](Index ip, auto&& add) {
+    for (int k = 0; k < ip_rows_.size(ip); ++k) add(ip_rows_.node(ip, k));
+  });
+  test_rows_.assign(node_points.offsets, ip_rows_.precision());
+  // Entry e of node I names point node_points.nodes[e]; walking each point's row in the transpose's order puts its
+  // gradient at the next free entry of its node.
+  std::vector<std::int64_t> next(node_points.offsets.begin(), node_points.offsets.end() - 1);
+  for (Index ip = 0; ip < points; ++ip)
+    for (int k = 0; k < ip_rows_.size(ip); ++k) {
+      const Index node = ip_rows_.node(ip, k);
+      test_rows_.set(next[static_cast<std::size_t>(node)]++, ip, ip_rows_.gradient(ip, k) + gradient_correction(ip, node));
+    }
 }
 
 // The corrections: with delta_I(p) = xi_I - mean_{J in p} xi_J, node I's constraint sum_p w_p delta_I(p) = r_I
@@ -392,24 +460,11 @@ void Model::pad_displacement(std::span<const double> u, int thread) const {
     for (std::size_t c = 0; c < 3; ++c) padded_u_[4 * static_cast<std::size_t>(i) + c] = u[3 * static_cast<std::size_t>(i) + c];
 }
 
-// A team task: sums the per-thread buffers in a fixed order over thread `thread`'s share of the nodes.
-void Model::reduce_thread_forces(std::span<double> f, int thread) const {
-  const auto [begin, end] = ThreadTeam::share(node_count(), thread, team_->size());
-  for (std::int64_t i = begin; i < end; ++i)
-    for (std::size_t c = 0; c < 3; ++c) {
-      double sum = 0.0;
-      for (const auto& buffer : thread_forces_) sum += buffer[4 * static_cast<std::size_t>(i) + c];
-      f[3 * static_cast<std::size_t>(i) + c] = sum;
-    }
-}
-
-// The forces of integration points begin .. end - 1 into f4, in batches of consecutive points with one
-// material. Returns the first inadmissible point, or the largest Index.
-Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
+// The stress records of integration points begin .. end - 1, in batches of consecutive points with one material.
+Index Model::point_stresses(Index begin, Index end) const {
   constexpr int kCapacity = StressBatch::kCapacity;
   Index first_bad = std::numeric_limits<Index>::max();
   StressBatch batch{};
-  double P[9][kCapacity];
   double weights[kCapacity];
   bool skip[kCapacity];
   for (Index first = begin; first < end; first += batch.count) {
@@ -424,10 +479,16 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
       skip[p] = p < count && !batch.admissible[p];
       if (skip[p]) first_bad = std::min(first_bad, first + p);
     }
-    force_kernel::first_piola(batch, weights, P);
-    force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, f4);
+    force_kernel::store_stress_records(batch, weights, skip,
+                                       stress_records_.data() + static_cast<std::size_t>(kStressRecord) * first);
   }
   return first_bad;
+}
+
+// A team task: the forces of thread `thread`'s share of the nodes (shares of about equal entries).
+void Model::node_forces(std::span<double> f, int thread) const {
+  force_kernel::node_forces(test_rows_, stress_records_.data(), node_shares_[static_cast<std::size_t>(thread)],
+                            node_shares_[static_cast<std::size_t>(thread) + 1], f.data());
 }
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
@@ -435,16 +496,13 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
   const std::int64_t n = integration_point_count();
   std::vector<Index>& first_bad = thread_first_bad_;
   team_->run([&](int thread) {
-    AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
-    std::fill(local.begin(), local.end(), 0.0);
     pad_displacement(u, thread);
     team_->barrier();
     // Contiguous shares, so that each thread's batches are consecutive points.
     const auto [begin, end] = ThreadTeam::share(n, thread, team_->size());
-    first_bad[static_cast<std::size_t>(thread)] =
-        accumulate_forces(static_cast<Index>(begin), static_cast<Index>(end), local.data());
+    first_bad[static_cast<std::size_t>(thread)] = point_stresses(static_cast<Index>(begin), static_cast<Index>(end));
     team_->barrier();
-    reduce_thread_forces(f, thread);
+    node_forces(f, thread);
   });
   const Index bad = *std::min_element(first_bad.begin(), first_bad.end());
   return bad == std::numeric_limits<Index>::max() ? -1 : bad;
@@ -478,23 +536,27 @@ Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F)
 
 void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f) const {
   const Index n = integration_point_count();
-  const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
   team_->run([&](int thread) {
-    AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
-    std::fill(local.begin(), local.end(), 0.0);
-    double P[9][StressBatch::kCapacity];
-    const bool skip[StressBatch::kCapacity] = {};
-    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, team_->size());
-    for (auto b = batch_begin; b < batch_end; ++b) {
-      const auto first = static_cast<Index>(b * StressBatch::kCapacity);
-      const int count = std::min<Index>(StressBatch::kCapacity, n - first);
-      for (int p = 0; p < count; ++p)
-        for (int c = 0; c < 9; ++c) P[c][p] = weighted_stress[first + p](c / 3, c % 3);
-      force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, local.data());
+    const auto [begin, end] = ThreadTeam::share(n, thread, team_->size());
+    for (auto ip = static_cast<std::size_t>(begin); ip < static_cast<std::size_t>(end); ++ip) {
+      double* record = stress_records_.data() + kStressRecord * ip;
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) record[4 * j + i] = weighted_stress[ip](i, j);
     }
     team_->barrier();
-    reduce_thread_forces(f, thread);
+    node_forces(f, thread);
   });
+}
+
+std::int64_t Model::streamed_bytes_per_force_evaluation() const {
+  const bool single = ip_rows_.precision() == RowPrecision::single_precision;
+  const std::int64_t real = single ? 4 : 8;
+  const std::int64_t gather_rows = ip_rows_.blocks() * GradientRows::kBlock * (static_cast<std::int64_t>(sizeof(Index)) + 3 * real);
+  const std::int64_t node_rows =
+      test_rows_.entries() * (single ? sizeof(TestGradientEntry<float>) : sizeof(TestGradientEntry<double>));
+  const std::int64_t points = integration_point_count() * (8 + 2 + 2 * 8 * kStressRecord);
+  const std::int64_t nodes = node_count() * (4 + 3) * 8;
+  return gather_rows + node_rows + points + nodes;
 }
 
 double Model::strain_energy(std::span<const double> u) const {

@@ -305,6 +305,12 @@ const ComponentDeclaration& discretisation_declaration() {
         .doc("correct the test-function gradients so that the discrete equations reproduce homogeneous "
              "deformations exactly (variationally consistent integration, Chen et al. 2013; passes the patch "
              "test); false gives the paper's plain MTLED quadrature");
+    d.string("precision")
+        .defaults("double")
+        .choices({"double", "single"})
+        .doc("the precision the force kernel stores its shape-function gradients in: single halves the bytes it "
+             "streams per support entry (about 6e-8 relative rounding per gradient); stresses, sums and the state "
+             "stay double (docs/performance.md)");
     return d;
   }();
   return declaration;

@@ -118,6 +118,8 @@ void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh
   Model::Options options;
   options.integration_points_per_tet = static_cast<int>(scene.discretisation.integer("integration_points_per_tet"));
   options.consistent_integration = scene.discretisation.boolean("consistent_integration");
+  options.precision = scene.discretisation.string("precision") == "single" ? RowPrecision::single_precision
+                                                                           : RowPrecision::double_precision;
   if (scene.volumetric) options.volumetric = build<VolumetricTreatment>(catalog, *scene.volumetric);
   model_ = std::make_unique<Model>(std::move(mesh), shape_functions, std::move(materials), options);
   const SupportStatistics stats = model_->ip_support_statistics();
