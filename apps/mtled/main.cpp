@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "mtled/errors.hpp"
+#include "mtled/json.hpp"
 #include "mtled/log.hpp"
 #include "mtled/simd.hpp"
 #include "mtled/version.hpp"
@@ -16,6 +17,7 @@ struct Commands {
   std::string log_level = "info";
   std::vector<std::filesystem::path> plugin_paths;
   std::string simd = "best";
+  std::string backend;  // run --backend: the scene's /backend block
   mtled::app::RunOptions run;
   mtled::app::SceneOptions validate;
   bool as_json = false, as_markdown = false;
@@ -44,6 +46,9 @@ void add_scene_commands(CLI::App& cli, Commands& c) {
   c.run_cmd->add_option("--threads", c.run.threads, "threads for the force loop (default: OMP_NUM_THREADS when set, else all cores)")
       ->check(CLI::NonNegativeNumber);
   c.run_cmd->add_flag("!--no-progress", c.run.progress, "no progress display (it only shows on a terminal anyway)");
+  c.run_cmd->add_option("--backend", c.backend,
+                        "where the time step runs: cpu, or a backend plugin such as cuda (sets the scene's "
+                        "/backend; mtled plugins lists those built)");
 
   c.validate_cmd = cli.add_subcommand("validate", "check a scene against every named component's parameters");
   c.validate_cmd->add_option("scene", c.validate.scene, "scene file (JSON)")->required();
@@ -87,7 +92,10 @@ void add_analysis_commands(CLI::App& cli, Commands& c) {
 int dispatch(Commands& c) {
   using namespace mtled;
   simd::use(c.simd);
-  if (*c.run_cmd) return app::run_scene(c.run);
+  if (*c.run_cmd) {
+    if (!c.backend.empty()) c.run.scene.overrides.push_back("/backend=" + json{{"type", c.backend}}.dump());
+    return app::run_scene(c.run);
+  }
   if (*c.validate_cmd) return app::validate_scene_command(c.validate);
   if (*c.plugins_cmd) return app::list_plugins(c.plugin_paths, c.as_json, c.as_markdown, c.describe);
   if (*c.schema_cmd) return app::print_schema(c.plugin_paths);

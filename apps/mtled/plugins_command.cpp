@@ -81,6 +81,7 @@ std::string example_scene_block(const ComponentDeclaration& d) {
     case Category::needle: return fmt::format("\"needle\": {}", text);
     case Category::integrator: return fmt::format("\"integrator\": {}", text);
     case Category::volumetric: return fmt::format("\"volumetric\": {}", text);
+    case Category::backend: return fmt::format("\"backend\": {}", text);
     case Category::scene: break;
   }
   return text;

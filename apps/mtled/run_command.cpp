@@ -205,6 +205,7 @@ class SceneRun {
       simulation_ = std::make_unique<Simulation>(scene_, catalog_);
       add_scene_monitors(*simulation_, scene_);
       setup_time_ = seconds_since(setup_start);
+      summary_["backend"] = simulation_->backend();
       log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time_, simulation_->unscaled_stable_time_step());
       observer_ = std::make_unique<RunObserver>(folder_, *simulation_, scene_.output, progress);
       solve_start_ = Clock::now();

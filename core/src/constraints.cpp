@@ -52,11 +52,11 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
                         [](const Row& x, const Row& y) { return x.set == y.set && x.entry == y.entry; });
     });
     if (same != blocks_.end()) {
-      same->components.push_back(c);
+      same->phi.components.push_back(c);
       continue;
     }
     blocks_.emplace_back();
-    blocks_.back().components = {c};
+    blocks_.back().phi.components = {c};
     blocks_.back().rows = std::move(rows);
   }
   for (Block& block : blocks_) build_block(block, mass);
@@ -64,13 +64,16 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
 
 void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
   const SupportRows& psi = model_.node_interpolation();
+  ConstraintBlock& phi_block = block.phi;
   const auto m = static_cast<Eigen::Index>(block.rows.size());
+  phi_block.rows = m;
+  phi_block.revision = factorisations_;
   std::vector<Eigen::Triplet<double>> triplets;
   std::vector<Index> support;
   std::vector<double> values;
-  block.row_offsets.assign(1, 0);
-  block.row_nodes.clear();
-  block.row_values.clear();
+  phi_block.row_offsets.assign(1, 0);
+  phi_block.row_nodes.clear();
+  phi_block.row_values.clear();
   for (Eigen::Index r = 0; r < m; ++r) {
     const NodalConstraints& set = *sets_[block.rows[r].set];
     if (!set.points().empty()) {
@@ -84,34 +87,35 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
       values.assign(psi.values.begin() + psi.offsets[node], psi.values.begin() + psi.offsets[node + 1]);
     }
     for (std::size_t k = 0; k < support.size(); ++k) triplets.emplace_back(r, support[k], values[k]);
-    block.row_nodes.insert(block.row_nodes.end(), support.begin(), support.end());
-    block.row_values.insert(block.row_values.end(), values.begin(), values.end());
-    block.row_offsets.push_back(static_cast<std::int64_t>(block.row_nodes.size()));
+    phi_block.row_nodes.insert(phi_block.row_nodes.end(), support.begin(), support.end());
+    phi_block.row_values.insert(phi_block.row_values.end(), values.begin(), values.end());
+    phi_block.row_offsets.push_back(static_cast<std::int64_t>(phi_block.row_nodes.size()));
   }
 
   // Phi by node, scaled by 1 / m: entries in row order within each node.
-  std::vector<std::size_t> order(block.row_nodes.size());
+  std::vector<std::size_t> order(phi_block.row_nodes.size());
   for (std::size_t e = 0; e < order.size(); ++e) order[e] = e;
   std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return block.row_nodes[a] < block.row_nodes[b]; });
-  std::vector<Index> entry_row(block.row_nodes.size());
+                   [&](std::size_t a, std::size_t b) { return phi_block.row_nodes[a] < phi_block.row_nodes[b]; });
+  std::vector<Index> entry_row(phi_block.row_nodes.size());
   for (Eigen::Index r = 0; r < m; ++r)
-    for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e) entry_row[e] = static_cast<Index>(r);
-  block.nodes.clear();
-  block.node_offsets.assign(1, 0);
-  block.node_rows.resize(order.size());
-  block.node_values.resize(order.size());
+    for (std::int64_t e = phi_block.row_offsets[r]; e < phi_block.row_offsets[r + 1]; ++e)
+      entry_row[e] = static_cast<Index>(r);
+  phi_block.nodes.clear();
+  phi_block.node_offsets.assign(1, 0);
+  phi_block.node_rows.resize(order.size());
+  phi_block.node_values.resize(order.size());
   for (std::size_t k = 0; k < order.size(); ++k) {
     const std::size_t e = order[k];
-    const Index node = block.row_nodes[e];
-    if (block.nodes.empty() || block.nodes.back() != node) {
-      if (!block.nodes.empty()) block.node_offsets.push_back(static_cast<std::int64_t>(k));
-      block.nodes.push_back(node);
+    const Index node = phi_block.row_nodes[e];
+    if (phi_block.nodes.empty() || phi_block.nodes.back() != node) {
+      if (!phi_block.nodes.empty()) phi_block.node_offsets.push_back(static_cast<std::int64_t>(k));
+      phi_block.nodes.push_back(node);
     }
-    block.node_rows[k] = entry_row[e];
-    block.node_values[k] = block.row_values[e] / mass[node];
+    phi_block.node_rows[k] = entry_row[e];
+    phi_block.node_values[k] = phi_block.row_values[e] / mass[node];
   }
-  block.node_offsets.push_back(static_cast<std::int64_t>(order.size()));
+  phi_block.node_offsets.push_back(static_cast<std::int64_t>(order.size()));
 
   Eigen::SparseMatrix<double> phi(m, static_cast<Eigen::Index>(model_.node_count()));
   phi.setFromTriplets(triplets.begin(), triplets.end());
@@ -122,7 +126,7 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
   block.factor.compute(a);
   if (block.factor.info() != Eigen::Success) {
     std::string names;
-    for (int c : block.components) names += "xyz"[c];
+    for (int c : phi_block.components) names += "xyz"[c];
     throw InputError("/boundaries",
                      fmt::format("the constrained nodes of component(s) {} cannot all be prescribed independently (the "
                                  "constraint matrix is singular): are two constraint sets prescribing coincident nodes?",
@@ -132,17 +136,17 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
   block.inverse_diagonal.resize(static_cast<std::size_t>(D.size()));
   for (Eigen::Index i = 0; i < D.size(); ++i) block.inverse_diagonal[static_cast<std::size_t>(i)] = 1.0 / D[i];
   log().debug("constraints: components {} share {} rows; Phi {} entries, A {} entries, its factor {} entries",
-              block.components, block.rows.size(), block.row_nodes.size(), a.nonZeros(),
+              phi_block.components, block.rows.size(), phi_block.row_nodes.size(), a.nonZeros(),
               block.factor.matrixL().nestedExpression().nonZeros());
-  const std::size_t size = block.rows.size() * block.components.size();
+  const std::size_t size = block.rows.size() * phi_block.components.size();
   block.y.assign(size, 0.0);
   block.work.assign(size, 0.0);
 }
 
-void ConstraintSystem::constrained_values(const Block& block, std::span<const double> v,
-                                          std::vector<double>& out) const {
+void constrained_values(const ConstraintBlock& block, std::span<const double> v, std::vector<double>& out,
+                        ThreadTeam& team) {
   const std::size_t k = block.components.size();
-  model_.team().for_each_share(static_cast<std::int64_t>(block.rows.size()), [&](std::int64_t begin, std::int64_t end) {
+  team.for_each_share(block.rows, [&](std::int64_t begin, std::int64_t end) {
     for (auto r = static_cast<std::size_t>(begin); r < static_cast<std::size_t>(end); ++r) {
       double sum[3] = {0.0, 0.0, 0.0};
       for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e) {
@@ -154,9 +158,9 @@ void ConstraintSystem::constrained_values(const Block& block, std::span<const do
   }, kRowsWorthAThread);
 }
 
-void ConstraintSystem::add_correction(const Block& block, const std::vector<double>& y, std::span<double> v) const {
+void add_correction(const ConstraintBlock& block, const std::vector<double>& y, std::span<double> v, ThreadTeam& team) {
   const std::size_t k = block.components.size();
-  model_.team().for_each_share(static_cast<std::int64_t>(block.nodes.size()), [&](std::int64_t begin, std::int64_t end) {
+  team.for_each_share(static_cast<std::int64_t>(block.nodes.size()), [&](std::int64_t begin, std::int64_t end) {
     for (auto n = static_cast<std::size_t>(begin); n < static_cast<std::size_t>(end); ++n) {
       double sum[3] = {0.0, 0.0, 0.0};
       for (std::int64_t e = block.node_offsets[n]; e < block.node_offsets[n + 1]; ++e) {
@@ -168,6 +172,8 @@ void ConstraintSystem::add_correction(const Block& block, const std::vector<doub
     }
   }, kRowsWorthAThread);
 }
+
+ConstrainedVector::~ConstrainedVector() = default;
 
 namespace {
 
@@ -213,7 +219,7 @@ void solve_factored(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& fa
 }  // namespace
 
 void ConstraintSystem::solve(const Block& block, std::vector<double>& y, std::vector<double>& work) const {
-  const std::size_t k = block.components.size(), rows = block.rows.size();
+  const std::size_t k = block.phi.components.size(), rows = block.rows.size();
   work.resize(y.size());
   const double* D_inverse = block.inverse_diagonal.data();
   if (k == 1) return solve_factored<1>(block.factor, D_inverse, y.data(), 1, 0, work.data());
@@ -227,30 +233,51 @@ void ConstraintSystem::solve(const Block& block, std::vector<double>& y, std::ve
   });
 }
 
-void ConstraintSystem::enforce(std::span<double> u, double alpha) {
+void ConstraintSystem::enforce(ConstrainedVector& u, double alpha) {
   for (Block& block : blocks_) {
-    const std::size_t k = block.components.size();
-    constrained_values(block, u, block.y);  // into the block's own vectors: no allocation in the time step
+    const std::size_t k = block.phi.components.size();
+    u.values(block.phi, block.y);  // into the block's own vectors: no allocation in the time step
     for (std::size_t r = 0; r < block.rows.size(); ++r) {
       const Vec3& prescribed = sets_[block.rows[r].set]->values[block.rows[r].entry];
-      for (std::size_t j = 0; j < k; ++j) block.y[k * r + j] = prescribed[block.components[j]] - block.y[k * r + j];
+      for (std::size_t j = 0; j < k; ++j) block.y[k * r + j] = prescribed[block.phi.components[j]] - block.y[k * r + j];
     }
     solve(block, block.y, block.work);
-    add_correction(block, block.y, u);
+    u.correct(block.phi, block.y);
     for (std::size_t r = 0; r < block.rows.size(); ++r) {
       Vec3& reaction = sets_[block.rows[r].set]->reactions[block.rows[r].entry];
-      for (std::size_t j = 0; j < k; ++j) reaction[block.components[j]] = block.y[k * r + j] / alpha;
+      for (std::size_t j = 0; j < k; ++j) reaction[block.phi.components[j]] = block.y[k * r + j] / alpha;
     }
   }
+}
+
+namespace {
+// A host vector as the projection's target.
+class HostVector final : public ConstrainedVector {
+ public:
+  HostVector(std::span<double> v, ThreadTeam& team) : v_(v), team_(team) {}
+  void values(const ConstraintBlock& block, std::vector<double>& out) override {
+    constrained_values(block, v_, out, team_);
+  }
+  void correct(const ConstraintBlock& block, const std::vector<double>& y) override { add_correction(block, y, v_, team_); }
+
+ private:
+  std::span<double> v_;
+  ThreadTeam& team_;
+};
+}  // namespace
+
+void ConstraintSystem::enforce(std::span<double> u, double alpha) {
+  HostVector vector(u, model_.team());
+  enforce(vector, alpha);
 }
 
 void ConstraintSystem::project_out(std::span<double> v) const {
   for (const Block& block : blocks_) {
     std::vector<double> y(block.y.size()), work;
-    constrained_values(block, v, y);
+    constrained_values(block.phi, v, y, model_.team());
     for (double& value : y) value = -value;
     solve(block, y, work);
-    add_correction(block, y, v);
+    add_correction(block.phi, y, v, model_.team());
   }
 }
 
@@ -258,16 +285,10 @@ void ConstraintSystem::add_constraint_forces(std::span<double> f) const {
   for (const Block& block : blocks_)
     for (std::size_t r = 0; r < block.rows.size(); ++r) {
       const Vec3& reaction = sets_[block.rows[r].set]->reactions[block.rows[r].entry];
-      for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e)
-        for (int c : block.components)
-          f[3 * static_cast<std::size_t>(block.row_nodes[e]) + c] += block.row_values[e] * reaction[c];
+      for (std::int64_t e = block.phi.row_offsets[r]; e < block.phi.row_offsets[r + 1]; ++e)
+        for (int c : block.phi.components)
+          f[3 * static_cast<std::size_t>(block.phi.row_nodes[e]) + c] += block.phi.row_values[e] * reaction[c];
     }
-}
-
-Index ConstraintSystem::constrained_count() const {
-  std::size_t count = 0;
-  for (const auto& block : blocks_) count += block.rows.size() * block.components.size();
-  return static_cast<Index>(count);
 }
 
 }  // namespace mtled

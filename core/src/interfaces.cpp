@@ -1,6 +1,11 @@
 // What the interfaces in mtled/interfaces/ define beyond their declarations.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+
+#include "explicit_update.hpp"
+#include "mtled/interfaces/backend.hpp"
 #include "mtled/interfaces/driver.hpp"
 #include "mtled/interfaces/integrator.hpp"
 #include "mtled/interfaces/material.hpp"
@@ -23,6 +28,46 @@ VolumetricTreatment::~VolumetricTreatment() = default;
 StepMonitor::~StepMonitor() = default;
 StepControl::~StepControl() = default;
 DiscreteSystem::~DiscreteSystem() = default;
+StepEngine::~StepEngine() = default;
+
+IncrementSums DiscreteSystem::evaluate_forces(bool increment_sums) {
+  const auto u = displacement();
+  f_int_previous_.swap(f_int_);
+  f_int_.resize(u.size());
+  f_int_previous_.resize(u.size());
+  internal_forces(u, f_int_);
+  IncrementSums sums;
+  if (!increment_sums) return sums;
+  const auto u_previous = previous_displacement();
+  const auto m = mass();
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    const double du = u[i] - u_previous[i];
+    sums.stiffness += du * (f_int_[i] - f_int_previous_[i]);
+    sums.inertia += du * du * m[i / 3];
+  }
+  return sums;
+}
+
+StepSums DiscreteSystem::advance(double alpha, double beta, double time, double load_fraction) {
+  const auto u = displacement();
+  u_next_.resize(u.size());
+  const double* f_ext = nullptr;
+  if (has_external_forces()) {
+    f_ext_.resize(u.size());
+    external_forces(f_ext_);
+    f_ext = f_ext_.data();
+  }
+  explicit_update(u.data(), previous_displacement().data(), f_ext, f_int_.data(), mass().data(), alpha, beta,
+                  u_next_.data(), 0, mass().size());
+  complete_step(u_next_, time, load_fraction, alpha);
+  StepSums sums;
+  const auto after = displacement(), before = previous_displacement();
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    sums.largest_increment = std::max(sums.largest_increment, std::abs(after[i] - before[i]));
+    sums.largest_displacement = std::max(sums.largest_displacement, std::abs(after[i]));
+  }
+  return sums;
+}
 
 void Material::stress_batch(StressBatch& batch) const noexcept {
   for (int p = 0; p < batch.count; ++p) {

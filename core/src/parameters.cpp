@@ -13,7 +13,8 @@ constexpr std::pair<Category, std::string_view> kCategoryNames[] = {
     {Category::mesh, "mesh"},         {Category::shape_function, "shape_function"},
     {Category::material, "material"}, {Category::boundary, "boundary"},
     {Category::needle, "needle"},     {Category::integrator, "integrator"},
-    {Category::volumetric, "volumetric"}, {Category::scene, "scene"}};
+    {Category::volumetric, "volumetric"}, {Category::backend, "backend"},
+    {Category::scene, "scene"}};
 
 std::string format_number(double v) {
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
@@ -49,7 +50,7 @@ const std::vector<Category>& plugin_categories() {
   static const std::vector<Category> categories = {Category::mesh,     Category::shape_function,
                                                    Category::material, Category::boundary,
                                                    Category::needle,   Category::integrator,
-                                                   Category::volumetric};
+                                                   Category::volumetric, Category::backend};
   return categories;
 }
 

@@ -147,6 +147,10 @@ const ComponentDeclaration& PluginCatalog::load(Category category, std::string_v
     if (!hint.empty()) message += "; " + hint;
     message += known.empty() ? fmt::format(" (no {} plugins found)", to_string(category))
                              : fmt::format(" (available: {})", fmt::join(known, ", "));
+    // The one plugin whose absence is a build option, not a typo.
+    if (category == Category::backend && name == "cuda")
+      message += "; the cuda backend is built when CMake finds the CUDA toolkit (nvcc): rebuild with it, or run on "
+                 "the CPU (leave out /backend, or --backend cpu)";
     std::vector<std::string> folders;
     for (const auto& f : search_path_) folders.push_back(f.string());
     message += fmt::format("; plugin folders searched: {}", folders.empty() ? "none" : fmt::format("{}", fmt::join(folders, ":")));

@@ -447,8 +447,8 @@ struct Validator {
 const std::vector<std::string>& top_level_keys() {
   static const std::vector<std::string> keys = {"$schema",   "description", "plugin_paths",   "mesh",
                                                 "shape_function", "materials", "boundaries", "needle",
-                                                "integrator", "volumetric", "discretisation", "output",
-                                                "monitors"};
+                                                "integrator", "volumetric", "backend", "discretisation",
+                                                "output", "monitors"};
   return keys;
 }
 
@@ -508,6 +508,8 @@ Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
   scene.integrator = required("integrator", Category::integrator);
   if (root.contains("volumetric") && !root["volumetric"].is_null())
     scene.volumetric = v.component(root["volumetric"], "/volumetric", Category::volumetric);
+  if (root.contains("backend") && !root["backend"].is_null())
+    scene.backend = v.component(root["backend"], "/backend", Category::backend);
   json discretisation = root.value("discretisation", json::object());
   if (discretisation.is_object() && discretisation.contains("volumetric")) {  // where earlier scenes chose it
     v.problems.push_back({"/discretisation/volumetric",
@@ -573,6 +575,7 @@ json scene_json_schema(PluginCatalog& catalog) {
       {"needle", optional(one_of(Category::needle))},
       {"integrator", one_of(Category::integrator)},
       {"volumetric", optional(one_of(Category::volumetric))},
+      {"backend", optional(one_of(Category::backend))},
       {"discretisation", discretisation_declaration().to_json_schema()},
       {"output", output_declaration().to_json_schema()},
       {"monitors", monitors_declaration().to_json_schema()}};

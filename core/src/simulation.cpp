@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "mtled/cpu_engine.hpp"
 #include "mtled/instability.hpp"
 #include "mtled/log.hpp"
 
@@ -98,18 +99,32 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   auto materials = region_materials(scene, catalog, mesh);
   build_model(scene, catalog, std::move(mesh), std::move(materials));
   build_drivers(scene, catalog);
+  build_engine(scene, catalog);
   // The state: at rest, the constraints applied.
   const std::size_t dofs = 3 * static_cast<std::size_t>(model_->node_count());
-  u_.assign(dofs, 0.0);
-  u_previous_.assign(dofs, 0.0);
-  u_before_.assign(dofs, 0.0);
   mass_ = model_->lumped_mass();
+  engine_->set_mass(mass_);
   const auto& dt = model_->ip_critical_time_steps();
   unscaled_stable_time_step_ = stable_time_step_ = *std::min_element(dt.begin(), dt.end());
   update_drivers();
-  constraint_system_->enforce(u_, 1.0);
+  std::vector<double> u(dofs, 0.0);
+  constraint_system_->enforce(u, 1.0);
+  engine_->set_state(u, std::vector<double>(dofs, 0.0));
 
   integrator_ = build<TimeIntegrator>(catalog, scene.integrator);
+}
+
+// The scene's backend, or the kernel's own CPU engine when it names none.
+void Simulation::build_engine(const Scene& scene, PluginCatalog& catalog) {
+  if (scene.backend)
+    engine_ = build<StepEngine>(catalog, *scene.backend);
+  else
+    engine_ = make_cpu_engine();
+  const Parameters* parameters = scene.backend ? &scene.backend->parameters : nullptr;
+  if (parameters != nullptr)
+    guarded(*parameters, "setting up the backend", [&] { engine_->setup(*model_); });
+  else
+    engine_->setup(*model_);
 }
 
 void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
@@ -162,16 +177,14 @@ void Simulation::equalise_critical_steps() {
   std::vector<double> scale(dt.size());
   for (std::size_t i = 0; i < dt.size(); ++i) scale[i] = dt[i] < target ? (target / dt[i]) * (target / dt[i]) : 1.0;
   mass_ = model_->lumped_mass(scale);
+  engine_->set_mass(mass_);
   double smallest = dt[0] * std::sqrt(scale[0]);
   for (std::size_t i = 0; i < dt.size(); ++i) smallest = std::min(smallest, dt[i] * std::sqrt(scale[i]));
   stable_time_step_ = smallest;
   mass_changed_ = true;
 }
 
-void Simulation::internal_forces(std::span<const double> u, std::span<double> f) {
-  ++force_evaluations_;
-  const Index bad = model_->internal_forces(u, f);
-  if (bad < 0) return;
+void Simulation::inadmissible(Index bad, std::span<const double> u) const {
   const Mat3 F = model_->deformation_gradient(bad, u);
   Diagnostic d;
   d.step = load_.step;
@@ -188,6 +201,20 @@ void Simulation::internal_forces(std::span<const double> u, std::span<double> f)
   throw InstabilityError(std::move(d));
 }
 
+void Simulation::internal_forces(std::span<const double> u, std::span<double> f) {
+  ++force_evaluations_;
+  const Index bad = engine_->internal_forces(u, f);
+  if (bad >= 0) inadmissible(bad, u);
+}
+
+IncrementSums Simulation::evaluate_forces(bool increment_sums) {
+  ++force_evaluations_;
+  IncrementSums sums;
+  const Index bad = engine_->evaluate_forces(increment_sums ? &sums : nullptr);
+  if (bad >= 0) inadmissible(bad, displacement());
+  return sums;
+}
+
 void Simulation::external_forces(std::span<double> f) {
   std::fill(f.begin(), f.end(), 0.0);
   for (const NodalForces* set : force_sets_)
@@ -196,24 +223,33 @@ void Simulation::external_forces(std::span<double> f) {
 }
 
 void Simulation::update_drivers() {
-  for (Driver* driver : drivers_) driver->update(load_, *model_, u_);
+  for (Driver* driver : drivers_) driver->update(load_, *model_, displacement());
   constraint_system_->update(constraint_sets_, mass_, mass_changed_);
   mass_changed_ = false;
 }
 
-void Simulation::check_finite(std::span<const double> u_new, double new_time) const {
-  for (std::size_t i = 0; i < u_new.size(); ++i) {
-    if (std::isfinite(u_new[i])) continue;
-    const auto node = static_cast<Index>(i / 3);
-    throw node_instability(load_.step + 1, new_time, "non_finite",
-                           fmt::format("displacement component {} of node {} at {} m became {}", "xyz"[i % 3], node,
-                                       point_text(model_->nodes()[node]), u_new[i]),
-                           *model_, node);
-  }
+void Simulation::not_finite(std::int64_t unknown, double value, double new_time) const {
+  const auto node = static_cast<Index>(unknown / 3);
+  throw node_instability(load_.step + 1, new_time, "non_finite",
+                         fmt::format("displacement component {} of node {} at {} m became {}", "xyz"[unknown % 3], node,
+                                     point_text(model_->nodes()[node]), value),
+                         *model_, node);
 }
 
-void Simulation::complete_step(std::span<double> u_new, double new_time, double new_load_fraction, double alpha) {
-  check_finite(u_new, new_time);
+namespace {
+// The engine's prediction as the constraint projection's target.
+class Prediction final : public ConstrainedVector {
+ public:
+  explicit Prediction(StepEngine& engine) : engine_(engine) {}
+  void values(const ConstraintBlock& block, std::vector<double>& out) override { engine_.constrained_values(block, out); }
+  void correct(const ConstraintBlock& block, const std::vector<double>& y) override { engine_.add_correction(block, y); }
+
+ private:
+  StepEngine& engine_;
+};
+}  // namespace
+
+void Simulation::project(double new_time, double new_load_fraction, double alpha) {
   previous_step_size_ = step_size_;
   step_size_ = new_time - load_.time;
   // The prescribed values before the drivers move them: their change times the reactions is the work the
@@ -224,11 +260,34 @@ void Simulation::complete_step(std::span<double> u_new, double new_time, double 
   load_.load_fraction = new_load_fraction;
   load_.step += 1;
   update_drivers();
-  u_free_.assign(u_new.begin(), u_new.end());
-  constraint_system_->enforce(u_new, alpha);
-  u_before_.swap(u_previous_);
-  u_previous_.swap(u_);
-  std::copy(u_new.begin(), u_new.end(), u_.begin());
+  Prediction prediction(*engine_);
+  constraint_system_->enforce(prediction, alpha);
+}
+
+StepSums Simulation::advance(double alpha, double beta, double new_time, double new_load_fraction) {
+  std::span<const double> f_ext;
+  if (has_external_forces()) {
+    f_ext_.resize(3 * static_cast<std::size_t>(model_->node_count()));
+    external_forces(f_ext_);
+    f_ext = f_ext_;
+  }
+  if (const std::int64_t bad = engine_->predict(alpha, beta, f_ext); bad >= 0) {
+    std::vector<double> u(3 * static_cast<std::size_t>(model_->node_count()));
+    engine_->prediction(u);
+    not_finite(bad, u[static_cast<std::size_t>(bad)], new_time);
+  }
+  project(new_time, new_load_fraction, alpha);
+  sums_ = engine_->commit();
+  return sums_;
+}
+
+void Simulation::complete_step(std::span<double> u_new, double new_time, double new_load_fraction, double alpha) {
+  for (std::size_t i = 0; i < u_new.size(); ++i)
+    if (!std::isfinite(u_new[i])) not_finite(static_cast<std::int64_t>(i), u_new[i], new_time);
+  engine_->set_prediction(u_new);
+  project(new_time, new_load_fraction, alpha);
+  engine_->prediction(u_new);  // handed back corrected
+  sums_ = engine_->commit();
 }
 
 StepRecord Simulation::last_step() const {
@@ -237,12 +296,13 @@ StepRecord Simulation::last_step() const {
   r.time = load_.time;
   r.step_size = step_size_;
   r.previous_step_size = previous_step_size_;
-  r.u = u_;
-  r.u_previous = u_previous_;
-  r.u_before = u_before_;
-  r.u_free = u_free_;
+  r.u = displacement();
   r.mass = mass_;
+  r.sums = sums_;
   r.model = model_.get();
+  r.internal_forces = [engine = engine_.get()](std::span<const double> u, std::span<double> f) {
+    return engine->internal_forces(u, f);
+  };
   r.constraints = constraint_system_.get();
   r.constraint_sets = &constraint_sets_;
   r.previous_values = &previous_values_;
@@ -294,8 +354,9 @@ void Simulation::lower_stable_time_step(double stable_time_step) {
 }
 
 std::vector<double> Simulation::interpolated_displacement() const {
-  std::vector<double> out(u_.size());
-  model_->interpolate(u_, out);
+  const auto u = displacement();
+  std::vector<double> out(u.size());
+  model_->interpolate(u, out);
   return out;
 }
 

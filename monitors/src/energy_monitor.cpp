@@ -6,7 +6,6 @@
 #include "mtled/instability.hpp"
 #include "mtled/constraints.hpp"
 #include "mtled/interfaces/driver.hpp"
-#include "mtled/thread_team.hpp"
 
 namespace mtled {
 
@@ -27,52 +26,19 @@ void EnergyMonitor::after_step(const StepRecord& step) {
         if (set.components()[c]) work_bound_ += std::abs(set.reactions[k][c] * (set.values[k][c] - previous_values[s][k][c]));
   }
   // The projection onto the constraints also changes the velocities it touches: the kinetic energy it adds is
-  // work the prescribed motion does on the nodes it drives directly. Only additions count: the energy it takes
-  // out of a growing mode (at fixed nodes) must not raise the bound that mode is measured against.
-  // The kinetic energy central differences conserve: 1/2 v(n-1/2) M v(n+1/2), the product of the two half-step
-  // velocities around step n. (The square of one half-step velocity overstates the energy of modes near the
-  // stability limit by 1 / (1 - (h omega / 2)^2), which would flag stable runs at large time-step factors.)
-  // For a mode that grows, it grows too (in magnitude). Both in one pass over the nodes, shared by the team on
-  // large clouds and summed in thread order.
+  // work the prescribed motion does on the nodes it drives directly (StepSums::projection_energy). Only additions
+  // count: the energy it takes out of a growing mode (at fixed nodes) must not raise the bound that mode is measured
+  // against. The kinetic energy central differences conserve: 1/2 v(n-1/2) M v(n+1/2), the product of the two
+  // half-step velocities around step n (StepSums::kinetic_product). (The square of one half-step velocity overstates
+  // the energy of modes near the stability limit by 1 / (1 - (h omega / 2)^2), which would flag stable runs at large
+  // time-step factors.) For a mode that grows, it grows too (in magnitude). The step engine sums both where the
+  // state lives.
   if (!(step.step_size > 0.0)) return;
   const double scale = step.previous_step_size > 0.0 ? 0.5 / (step.step_size * step.previous_step_size) : 0.0;
   const Model& model = *step.model;
-  ThreadTeam& team = model.team();
-  const int parts = model.node_count() >= 8192 * team.size() ? team.size() : 1;
-  sums_.assign(static_cast<std::size_t>(parts), Sums{});
-  const auto pass = [&](int thread) {
-    Sums& mine = sums_[static_cast<std::size_t>(thread)];
-    const auto [begin, end] = ThreadTeam::share(model.node_count(), thread, parts);
-    for (auto i = static_cast<std::size_t>(begin); i < static_cast<std::size_t>(end); ++i) {
-      double added = 0.0, product = 0.0;
-      for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
-        const double after = step.u[d] - step.u_previous[d], before = step.u_free[d] - step.u_previous[d];
-        added += std::max(0.0, after * after - before * before);
-        product += (step.u_previous[d] - step.u_before[d]) * after;
-      }
-      mine.added += step.mass[i] * added;
-      const double e = scale * step.mass[i] * product;
-      mine.kinetic += e;
-      if (std::abs(e) > mine.fastest_energy) {
-        mine.fastest_energy = std::abs(e);
-        mine.fastest = static_cast<Index>(i);
-      }
-    }
-  };
-  if (parts == 1)
-    pass(0);
-  else
-    team.run(pass);
-  double added = 0.0, kinetic = 0.0, fastest_energy = 0.0;
-  Index fastest = 0;
-  for (const Sums& part : sums_) {
-    added += part.added;
-    kinetic += part.kinetic;
-    if (part.fastest_energy > fastest_energy) {
-      fastest_energy = part.fastest_energy;
-      fastest = part.fastest;
-    }
-  }
+  const double added = step.sums.projection_energy;
+  const double kinetic = scale * step.sums.kinetic_product;
+  const Index fastest = step.sums.fastest_node;
   work_bound_ += 0.5 * added / (step.step_size * step.step_size);
   kinetic_energy_ = std::abs(kinetic);
   // External force drivers would need their own work; none of the shipped plugins has one.

@@ -2,8 +2,6 @@
 // Always on: stops a run whose kinetic energy exceeds what the loads can have put in (InstabilityError
 // "energy_growth"). Damping only removes energy, so kinetic plus strain energy never exceed the work of the
 // prescribed motions; a growing instability passes that bound within a few dozen steps.
-#include <vector>
-
 #include "mtled/monitor.hpp"
 
 namespace mtled {
@@ -18,15 +16,10 @@ class EnergyMonitor final : public StepMonitor {
   double kinetic_energy() const { return kinetic_energy_; }
 
  private:
-  struct Sums {
-    double added = 0.0, kinetic = 0.0, fastest_energy = 0.0;
-    Index fastest = 0;
-  };
   double work_bound_ = 0.0;  // J: sum of |reaction . increment of the prescribed value| and of the kinetic
                              // energy the constraint projection added
   double kinetic_energy_ = 0.0;
   double largest_ratio_ = 0.0;  // of the kinetic energy to the work bound, over the run
-  std::vector<Sums> sums_;      // per thread
 };
 
 }  // namespace mtled

@@ -4,7 +4,6 @@
 
 #include <cmath>
 
-#include "explicit_update.hpp"
 #include "load_curve.hpp"
 #include "mtled/plugin.hpp"
 
@@ -43,21 +42,14 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
     h_ = duration_ / static_cast<double>(planned_steps_);  // lands exactly on the duration
     // Central differences of M u'' + c M u' = r with u' = (u+ - u-) / 2h: (1 + ch/2) u+ = 2u - (1 - ch/2) u- + h^2 M^-1 r.
     set_coefficients();
-    const std::size_t dofs = system.displacement().size();
-    f_int_.assign(dofs, 0.0);
-    f_ext_.assign(dofs, 0.0);
-    u_next_.assign(dofs, 0.0);
   }
 
   void step(DiscreteSystem& system) override {
     double alpha = alpha_, beta = beta_;
     if (const double stable = system.stable_time_step(); stable != stable_) replan(system, stable, alpha, beta);
-    system.internal_forces(system.displacement(), f_int_);
-    if (system.has_external_forces()) system.external_forces(f_ext_);
-    explicit_update(system.displacement(), system.previous_displacement(), f_ext_, f_int_, system.mass(), alpha, beta,
-                    u_next_);
+    system.evaluate_forces(false);
     const double t = time_origin_ + static_cast<double>(system.step() + 1 - step_origin_) * h_;
-    system.complete_step(u_next_, t, load_fraction(curve_, t / load_time_), alpha);
+    system.advance(alpha, beta, t, load_fraction(curve_, t / load_time_));
   }
 
   bool finished(const DiscreteSystem& system) const override { return system.step() >= planned_steps_; }
@@ -108,7 +100,6 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
   long planned_steps_ = 0;
   double time_origin_ = 0.0;  // time and step at which the step size last changed
   long step_origin_ = 0;
-  std::vector<double> f_int_, f_ext_, u_next_;
 };
 
 }  // namespace mtled

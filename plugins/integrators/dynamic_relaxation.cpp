@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "explicit_update.hpp"
 #include "load_curve.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
@@ -76,11 +75,6 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     h_ = factor_ * stable_in_use_;
     // Start heavily damped (k = 20) until the first estimate of the lowest frequency arrives.
     set_frequency(0.1 * 2.0 / h_);
-    const std::size_t dofs = system.displacement().size();
-    f_int_.assign(dofs, 0.0);
-    f_int_previous_.assign(dofs, 0.0);
-    f_ext_.assign(dofs, 0.0);
-    u_next_.assign(dofs, 0.0);
   }
 
   void step(DiscreteSystem& system) override {
@@ -95,23 +89,17 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
       h_ = factor_ * stable;
       set_frequency(std::min(omega_min_, 2.0 / h_));
     }
-    const auto u = system.displacement();
-    const auto u_previous = system.previous_displacement();
-    const auto mass = system.mass();
-    f_int_previous_.swap(f_int_);
-    system.internal_forces(u, f_int_);
-    if (system.has_external_forces()) system.external_forces(f_ext_);
-
+    // The lowest frequency is re-estimated from the last increment before this step's coefficients are set.
     const long n = system.step();
-    if (n >= 2 && n % update_every_ == 0) estimate_frequency(u, u_previous, mass);
-
-    explicit_update(u, u_previous, f_ext_, f_int_, mass, alpha_, beta_ * increment_scale, u_next_);
+    const bool estimate = n >= 2 && n % update_every_ == 0;
+    const IncrementSums increment = system.evaluate_forces(estimate);
+    if (estimate) estimate_frequency(increment);
     // The ramp advances until the current increment's end, then holds while the body relaxes.
     if (ramp_step_ < increment_end()) ++ramp_step_;
     const double fraction = increment_load_fraction();
-    system.complete_step(u_next_, time_origin_ + static_cast<double>(n + 1 - step_origin_) * h_, fraction, alpha_);
-
-    if (ramp_step_ >= increment_end()) relax(system);
+    const StepSums sums = system.advance(alpha_, beta_ * increment_scale,
+                                         time_origin_ + static_cast<double>(n + 1 - step_origin_) * h_, fraction);
+    if (ramp_step_ >= increment_end()) relax(system, sums);
     // A long relaxation shows nothing else while it runs (--log-level debug).
     if ((n + 1) % 500 == 0)
       log().debug("dynamic relaxation step {}: lowest frequency {:.4g} rad/s, rate {:.6f}, error bound {:.3g} m ({:.3g} "
@@ -171,8 +159,8 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
 
   // Held at an increment's load: when the body is at rest there, count the equilibrium and go on loading (or
   // finish at the last).
-  void relax(DiscreteSystem& system) {
-    if (!steady(system)) return;
+  void relax(DiscreteSystem& system, const StepSums& sums) {
+    if (!steady(sums)) return;
     system.steady_state_reached();
     ++relaxed_;
     if (relaxed_ >= increments_) {
@@ -195,29 +183,19 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     alpha_ = 0.25 * (1.0 + rho_) * (1.0 + rho_) * h_ * h_;
   }
 
-  void estimate_frequency(std::span<const double> u, std::span<const double> u_previous, std::span<const double> mass) {
-    double stiffness = 0.0, inertia = 0.0;
-    for (std::size_t i = 0; i < u.size(); ++i) {
-      const double du = u[i] - u_previous[i];
-      stiffness += du * (f_int_[i] - f_int_previous_[i]);
-      inertia += du * du * mass[i / 3];
-    }
-    if (!(inertia > 0.0) || !(stiffness > 0.0) || !std::isfinite(stiffness / inertia)) return;
-    set_frequency(std::min(std::sqrt(stiffness / inertia), 2.0 / h_));
+  // w^2 ~ du.(f(u_n) - f(u_n-1)) / du.M du from the last increment.
+  void estimate_frequency(const IncrementSums& increment) {
+    if (!(increment.inertia > 0.0) || !(increment.stiffness > 0.0) || !std::isfinite(increment.stiffness / increment.inertia))
+      return;
+    set_frequency(std::min(std::sqrt(increment.stiffness / increment.inertia), 2.0 / h_));
   }
 
-  // Updates the error estimate; true once it has stayed under the tolerance for converged_steps steps.
-  bool steady(const DiscreteSystem& system) {
-    const auto u = system.displacement();
-    const auto u_previous = system.previous_displacement();
-    double increment = 0.0, largest = 0.0;
-    for (std::size_t i = 0; i < u.size(); ++i) {
-      increment = std::max(increment, std::abs(u[i] - u_previous[i]));
-      largest = std::max(largest, std::abs(u[i]));
-    }
-    largest_displacement_ = largest;
-    error_bound_ = rho_ < 1.0 ? increment * rho_ / (1.0 - rho_) : INFINITY;
-    below_ = error_bound_ <= tolerance_ * largest ? below_ + 1 : 0;
+  // Updates the error estimate from the step just completed; true once it has stayed under the tolerance for
+  // converged_steps steps.
+  bool steady(const StepSums& sums) {
+    largest_displacement_ = sums.largest_displacement;
+    error_bound_ = rho_ < 1.0 ? sums.largest_increment * rho_ / (1.0 - rho_) : INFINITY;
+    below_ = error_bound_ <= tolerance_ * largest_displacement_ ? below_ + 1 : 0;
     return below_ >= converged_steps_;
   }
 
@@ -239,7 +217,6 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   long ramp_step_ = 0;  // steps of the load ramp taken (the ramp holds while an increment relaxes)
   long relaxed_ = 0;    // increments relaxed to the steady state
   bool converged_ = false;
-  std::vector<double> f_int_, f_int_previous_, f_ext_, u_next_;
 };
 
 }  // namespace mtled

@@ -19,6 +19,39 @@
 
 namespace mtled {
 
+class ThreadTeam;
+
+// Phi for the constrained rows that some components share, in both orientations: by row for Phi v, by node for
+// Phi^T y (so that threads, or a device's threads, take disjoint nodes). Vectors over the rows hold one value per
+// component of the block, interleaved. `revision` changes whenever the blocks are rebuilt (a driver changed its
+// sets, or the masses changed): a backend that holds copies re-reads them then.
+struct ConstraintBlock {
+  std::vector<int> components;
+  std::int64_t rows = 0;
+  std::vector<std::int64_t> row_offsets;  // Phi by row: entries row_offsets[r] .. row_offsets[r+1] - 1
+  std::vector<Index> row_nodes;
+  std::vector<double> row_values;
+  std::vector<Index> nodes;                // the nodes Phi touches, each once
+  std::vector<std::int64_t> node_offsets;  // Phi by node: entries node_offsets[k] .. node_offsets[k+1] - 1
+  std::vector<Index> node_rows;
+  std::vector<double> node_values;  // Phi(r, node) / m_node
+  long revision = 0;
+};
+
+// The two products of the projection on a vector v of 3 unknowns per node, on the host (parallel on `team` when the
+// block is large): out = Phi v (rows x components), and v += M^-1 Phi^T y.
+void constrained_values(const ConstraintBlock& block, std::span<const double> v, std::vector<double>& out,
+                        ThreadTeam& team);
+void add_correction(const ConstraintBlock& block, const std::vector<double>& y, std::span<double> v, ThreadTeam& team);
+
+// The vector a projection corrects, wherever it lives (host memory, or a device's: StepEngine).
+class ConstrainedVector {
+ public:
+  virtual ~ConstrainedVector();
+  virtual void values(const ConstraintBlock& block, std::vector<double>& out) = 0;      // out = Phi v
+  virtual void correct(const ConstraintBlock& block, const std::vector<double>& y) = 0;  // v += M^-1 Phi^T y
+};
+
 class ConstraintSystem {
  public:
   explicit ConstraintSystem(const Model& model) : model_(model) {}
@@ -27,6 +60,7 @@ class ConstraintSystem {
   // pair claimed by several sets is enforced by the first set only (boundaries come before the needle);
   // the later sets get a zero reaction there.
   void update(const std::vector<NodalConstraints*>& sets, std::span<const double> mass, bool mass_changed);
+  void enforce(ConstrainedVector& u, double alpha);
   void enforce(std::span<double> u, double alpha);
   // f += Phi^T lambda: the nodal forces the constraints exerted in the last enforce().
   void add_constraint_forces(std::span<double> f) const;
@@ -34,7 +68,6 @@ class ConstraintSystem {
   // constrained value unchanged (the correction enforce() applies, for prescribed values held fixed). The
   // constrained dynamics live in that subspace; the stable-step monitor iterates in it.
   void project_out(std::span<double> v) const;
-  Index constrained_count() const;
   long factorisations() const { return factorisations_; }
 
  private:
@@ -42,29 +75,16 @@ class ConstraintSystem {
     std::size_t set;
     std::size_t entry;
   };
-  // The components that share one list of constrained rows, with Phi for those rows in both orientations
-  // (by row for Phi v, by node for Phi^T y, so that threads take disjoint nodes), and the factor of
-  // Phi M^-1 Phi^T. Vectors over the rows hold one value per component of the block, interleaved.
+  // A block with the rows it stands for and the factor of Phi M^-1 Phi^T.
   struct Block {
-    std::vector<int> components;
+    ConstraintBlock phi;
     std::vector<Row> rows;
-    std::vector<std::int64_t> row_offsets;  // Phi by row: entries row_offsets[r] .. row_offsets[r+1] - 1
-    std::vector<Index> row_nodes;
-    std::vector<double> row_values;
-    std::vector<Index> nodes;                // the nodes Phi touches, each once
-    std::vector<std::int64_t> node_offsets;  // Phi by node: entries node_offsets[k] .. node_offsets[k+1] - 1
-    std::vector<Index> node_rows;
-    std::vector<double> node_values;  // Phi(r, node) / m_node
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor;
     std::vector<double> inverse_diagonal;  // of the factor's D
     std::vector<double> y, work;  // rows x components: the residual, then the multipliers; solver scratch
   };
   void rebuild(std::span<const double> mass);
   void build_block(Block& block, std::span<const double> mass);
-  // out = Phi v over the block's components (rows x components), in parallel over the rows.
-  void constrained_values(const Block& block, std::span<const double> v, std::vector<double>& out) const;
-  // v += M^-1 Phi^T y over the block's components, in parallel over the nodes.
-  void add_correction(const Block& block, const std::vector<double>& y, std::span<double> v) const;
   // y = (Phi M^-1 Phi^T)^-1 y in place, for every component of the block at once (work: scratch).
   void solve(const Block& block, std::vector<double>& y, std::vector<double>& work) const;
 

@@ -3,10 +3,12 @@
 // PETSc's TSMonitorSet): a monitor reads the step just taken, keeps whatever state it needs between steps,
 // stops the run by throwing InstabilityError, and reports its own record into summary.json
 // ("monitors": {name: record}). The step itself knows none of them.
+#include <functional>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "mtled/interfaces/integrator.hpp"
 #include "mtled/json.hpp"
 #include "mtled/types.hpp"
 
@@ -31,10 +33,13 @@ struct StepRecord {
   double time = 0.0;        // s, at n + 1
   double step_size = 0.0;   // t(n+1) - t(n)
   double previous_step_size = 0.0;  // t(n) - t(n-1); 0 at the first step
-  std::span<const double> u, u_previous, u_before;  // displacements at n + 1, n and n - 1 (3 per node)
-  std::span<const double> u_free;                   // n + 1 before the constraint projection
-  std::span<const double> mass;                     // per node, as the integrator uses it
+  std::span<const double> u;     // displacements at n + 1 (3 per node)
+  std::span<const double> mass;  // per node, as the integrator uses it
+  StepSums sums;                 // the step's reductions over the unknowns (increments, energies)
   const Model* model = nullptr;
+  // f = f_int(u) for any state u (where the run computes its forces: the CPU, or a backend's device); -1 or the
+  // first inadmissible integration point.
+  std::function<Index(std::span<const double> u, std::span<double> f)> internal_forces;
   const ConstraintSystem* constraints = nullptr;
   const std::vector<NodalConstraints*>* constraint_sets = nullptr;
   const std::vector<std::vector<Vec3>>* previous_values = nullptr;  // the sets' prescribed values at n

@@ -17,7 +17,7 @@ namespace mtled {
 
 // What a component is for. Each category has its own interface in mtled/interfaces/ and its own place in
 // a scene. `scene` is the kernel's own sections (discretisation, output).
-enum class Category { mesh, shape_function, material, boundary, needle, integrator, volumetric, scene };
+enum class Category { mesh, shape_function, material, boundary, needle, integrator, volumetric, backend, scene };
 
 std::string_view to_string(Category category);
 
@@ -30,6 +30,7 @@ constexpr Category category_from_literal(std::string_view text) {
   if (text == "needle") return Category::needle;
   if (text == "integrator") return Category::integrator;
   if (text == "volumetric") return Category::volumetric;
+  if (text == "backend") return Category::backend;
   return Category::scene;
 }
 std::optional<Category> category_from_string(std::string_view text);

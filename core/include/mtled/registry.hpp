@@ -9,6 +9,7 @@
 #include <variant>
 #include <vector>
 
+#include "mtled/interfaces/backend.hpp"
 #include "mtled/interfaces/driver.hpp"
 #include "mtled/interfaces/integrator.hpp"
 #include "mtled/interfaces/material.hpp"
@@ -50,7 +51,7 @@ class Registry {
  private:
   using AnyFactory = std::variant<Factory<MeshSource>, Factory<ShapeFunctions>, Factory<Material>,
                                   Factory<BoundaryCondition>, Factory<NeedleModel>, Factory<TimeIntegrator>,
-                                  Factory<VolumetricTreatment>>;
+                                  Factory<VolumetricTreatment>, Factory<StepEngine>>;
   struct Entry {
     ComponentDeclaration declaration;
     AnyFactory factory;

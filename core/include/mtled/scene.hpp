@@ -51,6 +51,7 @@ struct Scene {
   std::optional<ComponentBlock> needle;
   ComponentBlock integrator;
   std::optional<ComponentBlock> volumetric;  // absent: each integration point's own J
+  std::optional<ComponentBlock> backend;     // absent: the kernel's own CPU engine
   Parameters discretisation;
   Parameters output;
   Parameters monitors;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "mtled/constraints.hpp"
+#include "mtled/interfaces/backend.hpp"
 #include "mtled/interfaces/integrator.hpp"
 #include "mtled/json.hpp"
 #include "mtled/model.hpp"
@@ -28,9 +29,9 @@ class Simulation final : public DiscreteSystem, private StepControl {
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
-  // ---- the DiscreteSystem the integrator advances
-  std::span<const double> displacement() const override { return u_; }
-  std::span<const double> previous_displacement() const override { return u_previous_; }
+  // ---- the DiscreteSystem the integrator advances; the state lives in the step engine (the CPU's, or a backend's)
+  std::span<const double> displacement() const override { return engine_->displacement(); }
+  std::span<const double> previous_displacement() const override { return engine_->previous_displacement(); }
   std::span<const double> mass() const override { return mass_; }
   long step() const override { return load_.step; }
   double time() const override { return load_.time; }
@@ -46,9 +47,14 @@ class Simulation final : public DiscreteSystem, private StepControl {
   // (reactions = correction / alpha), then becomes the current state.
   void complete_step(std::span<double> u_new, double new_time, double new_load_fraction, double alpha) override;
   void steady_state_reached() override { ++steady_states_; }
+  // The fused form both shipped integrators use: the engine's passes, with only the sums coming back.
+  IncrementSums evaluate_forces(bool increment_sums) override;
+  StepSums advance(double alpha, double beta, double new_time, double new_load_fraction) override;
 
   const Model& model() const { return *model_; }
   double load_fraction() const { return load_.load_fraction; }
+  // summary.json's "backend": the engine's own account (type, device, threads).
+  json backend() const { return engine_->describe(); }
 
   // ---- the loop and what outputs read
   void run(StepObserver* observer);
@@ -75,10 +81,16 @@ class Simulation final : public DiscreteSystem, private StepControl {
   void build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
                    std::vector<std::shared_ptr<const Material>> materials);
   void build_drivers(const Scene& scene, PluginCatalog& catalog);
+  void build_engine(const Scene& scene, PluginCatalog& catalog);
   void update_drivers();
+  // The step's end up to the new state: the load state moves on, the drivers update, the constraints correct the
+  // engine's prediction.
+  void project(double new_time, double new_load_fraction, double alpha);
   void lower_stable_time_step(double stable_time_step) override;
-  // Stops the run (InstabilityError "non_finite") when the integrator's update is not finite.
-  void check_finite(std::span<const double> u_new, double new_time) const;
+  // Stop the run with an InstabilityError: an inadmissible F at integration point `bad` of state u ("inverted_material"
+  // or "non_finite"), or a non-finite unknown of the update.
+  [[noreturn]] void inadmissible(Index bad, std::span<const double> u) const;
+  [[noreturn]] void not_finite(std::int64_t unknown, double value, double new_time) const;
 
   std::unique_ptr<Model> model_;
   std::vector<std::shared_ptr<BoundaryCondition>> boundaries_;
@@ -88,18 +100,18 @@ class Simulation final : public DiscreteSystem, private StepControl {
   std::vector<NodalForces*> force_sets_;
   std::unique_ptr<ConstraintSystem> constraint_system_;
   std::shared_ptr<TimeIntegrator> integrator_;
+  std::shared_ptr<StepEngine> engine_;
 
   LoadState load_;
-  std::vector<double> u_, u_previous_;
   std::vector<double> mass_;
+  std::vector<double> f_ext_;  // when some driver applies forces
+  StepSums sums_;              // of the step just completed
   bool mass_changed_ = true;
   double stable_time_step_ = 0.0;
   double unscaled_stable_time_step_ = 0.0;
   long force_evaluations_ = 0;
   long steady_states_ = 0;
   std::vector<std::vector<Vec3>> previous_values_;  // prescribed values of the previous step, per set
-  std::vector<double> u_before_;                    // the displacements a step before u_previous_
-  std::vector<double> u_free_;  // this step's displacements before the constraint projection
   double step_size_ = 0.0, previous_step_size_ = 0.0;
   double time_step_factor_ = 1.0;  // the integrator's, read once it is initialised
   double stable_step_margin_ = 0.9;  // the integrator's

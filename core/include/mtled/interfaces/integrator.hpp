@@ -4,11 +4,32 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "mtled/json.hpp"
 #include "mtled/parameters.hpp"
+#include "mtled/types.hpp"
 
 namespace mtled {
+
+// du.(f_n - f_(n-1)) and du.M du with du = u_n - u_(n-1): dynamic relaxation's estimate of the lowest frequency.
+struct IncrementSums {
+  double stiffness = 0.0;  // N m
+  double inertia = 0.0;    // kg m^2
+};
+
+// What a completed step u_n -> u_(n+1) leaves for the integrator and the monitors, reduced over the unknowns where
+// they live. u~ is the step's prediction before the constraint projection.
+struct StepSums {
+  double largest_increment = 0.0;     // max |u_(n+1) - u_n| over the unknowns (m)
+  double largest_displacement = 0.0;  // max |u_(n+1)| (m)
+  // sum over the unknowns d of m max(0, (u_(n+1) - u_n)_d^2 - (u~ - u_n)_d^2): what the projection added to the
+  // squared increments (kg m^2; the energy monitor's work of the prescribed motion).
+  double projection_energy = 0.0;
+  // sum_I m_I (u_n - u_(n-1)).(u_(n+1) - u_n): the product of the half-step velocities around step n (kg m^2).
+  double kinetic_product = 0.0;
+  Index fastest_node = 0;  // the node with the largest |m_I (u_n - u_(n-1)).(u_(n+1) - u_n)|
+};
 
 // The semi-discrete equations of motion M u'' + f_int(u) = f_ext(t), M lumped (one mass per node, three
 // unknowns per node), and the one call that completes a step. The kernel implements it for a scene; the
@@ -41,6 +62,18 @@ class DiscreteSystem {
   // Called by a steady-state integrator right after complete_step when the state just completed is at rest at its
   // load (a relaxed load increment): what the outputs record as an equilibrium.
   virtual void steady_state_reached() {}
+
+  // The damped central-difference family, u_(n+1) = u_n + beta (u_n - u_(n-1)) + alpha M^-1 (f_ext - f_int(u_n)), in
+  // two calls, so that the kernel can keep the vectors where it computes them (a GPU backend) and fuse the passes:
+  // evaluate_forces() computes f_int(u_n) (and, when asked, IncrementSums, before the coefficients are chosen);
+  // advance() makes the update and completes the step as complete_step() does, and returns the step's sums. Both
+  // shipped integrators step this way. The defaults go through the calls above (and fill only largest_increment and
+  // largest_displacement); the kernel overrides them.
+  virtual IncrementSums evaluate_forces(bool increment_sums);
+  virtual StepSums advance(double alpha, double beta, double time, double load_fraction);
+
+ private:
+  std::vector<double> f_int_, f_int_previous_, f_ext_, u_next_;  // the defaults' vectors
 };
 
 // A steady-state integrator's account of how far it is from the steady state.
