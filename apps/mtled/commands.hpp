@@ -20,6 +20,11 @@ struct RunOptions {
   bool progress = true;
 };
 
+struct MeshOptions {
+  SceneOptions scene;
+  std::filesystem::path output;  // FILE.inp
+};
+
 struct CompareOptions {
   std::filesystem::path a, b;       // run folders or result .vtu files
   bool json = false;                // machine-readable output
@@ -45,6 +50,7 @@ struct ConformanceOptions {
 // and other exceptions propagate to main, which prints them and picks the code.
 int run_scene(const RunOptions& options);
 int validate_scene_command(const SceneOptions& options);
+int mesh_command(const MeshOptions& options);
 int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as_json, bool as_markdown,
                  const std::string& describe);
 int print_schema(const std::vector<std::filesystem::path>& plugin_paths);

@@ -20,13 +20,14 @@ struct Commands {
   std::string backend;  // run --backend: the scene's /backend block
   mtled::app::RunOptions run;
   mtled::app::SceneOptions validate;
+  mtled::app::MeshOptions mesh;
   bool as_json = false, as_markdown = false;
   std::string describe;
   mtled::app::CompareOptions compare;
   mtled::app::StudyOptions study;
   mtled::app::ConformanceOptions conformance;
   CLI::App *run_cmd = nullptr, *validate_cmd = nullptr, *plugins_cmd = nullptr, *schema_cmd = nullptr,
-           *compare_cmd = nullptr, *study_cmd = nullptr, *conformance_cmd = nullptr;
+           *compare_cmd = nullptr, *study_cmd = nullptr, *conformance_cmd = nullptr, *mesh_cmd = nullptr;
 };
 
 void add_global_options(CLI::App& cli, Commands& c) {
@@ -49,6 +50,11 @@ void add_scene_commands(CLI::App& cli, Commands& c) {
   c.run_cmd->add_option("--backend", c.backend,
                         "where the time step runs: cpu, or a backend plugin such as cuda (sets the scene's "
                         "/backend; mtled plugins lists those built)");
+
+  c.mesh_cmd = cli.add_subcommand("mesh", "write a scene's mesh (read or generated) as an Abaqus .inp file");
+  c.mesh_cmd->add_option("scene", c.mesh.scene.scene, "scene file (JSON)")->required();
+  c.mesh_cmd->add_option("-o,--output", c.mesh.output, "the .inp file to write")->required();
+  c.mesh_cmd->add_option("--set", c.mesh.scene.overrides, "override a scene value: /json/pointer=value (repeatable)");
 
   c.validate_cmd = cli.add_subcommand("validate", "check a scene against every named component's parameters");
   c.validate_cmd->add_option("scene", c.validate.scene, "scene file (JSON)")->required();
@@ -97,6 +103,7 @@ int dispatch(Commands& c) {
     return app::run_scene(c.run);
   }
   if (*c.validate_cmd) return app::validate_scene_command(c.validate);
+  if (*c.mesh_cmd) return app::mesh_command(c.mesh);
   if (*c.plugins_cmd) return app::list_plugins(c.plugin_paths, c.as_json, c.as_markdown, c.describe);
   if (*c.schema_cmd) return app::print_schema(c.plugin_paths);
   if (*c.compare_cmd) return app::compare_command(c.compare, c.plugin_paths);
@@ -124,7 +131,7 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : 2;
   }
   set_log_level(c.log_level);
-  c.run.scene.plugin_paths = c.validate.plugin_paths = c.study.plugin_paths = c.plugin_paths;
+  c.run.scene.plugin_paths = c.validate.plugin_paths = c.mesh.scene.plugin_paths = c.study.plugin_paths = c.plugin_paths;
   c.study.log_level = c.log_level;
   try {
     return dispatch(c);

@@ -1,11 +1,11 @@
 // The force kernel's vectorised parts (force_kernel.hpp). Compiled once per instruction set by
 // hwy/foreach_target.h, which re-includes this file; HWY_DYNAMIC_DISPATCH picks the CPU's best at run time.
 //
-// Vectors of (at most) 4 doubles. The gather takes one lane per support entry of a row: on AVX2 and AVX-512 a
-// node's displacement record (x, y, z, 0) is one such vector, and the displacements of 4 entries are read as 4 loads
-// and a transpose, which is faster than the gather instructions; narrower targets gather lane by lane. The node
-// pass takes one lane per force component: a stress record's columns are such vectors. 512-bit vectors would not
-// pay in either: the records are 4 doubles wide.
+// Vectors of (at most) 4 doubles, one lane per support entry of a row. On AVX2 and AVX-512 a node's record
+// (x, y, z, 0) is one such vector: the displacements and gradient corrections of 4 entries are read as 4 loads
+// and a transpose, and their forces added back as a transpose and 4 read-modify-writes, which is faster than
+// the gather and scatter instructions (and AVX2 has no scatter); 512-bit vectors would not be faster here, since
+// the wider cores split them in two halves anyway. Narrower targets gather and add lane by lane.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "force_kernel.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -38,6 +38,19 @@ HWY_INLINE void load_records(D d, const double* base, const Index* offsets, V& x
   z = hn::ConcatUpperUpper(d, ce_even, ab_even);
 }
 
+// The entries' node records (at base + offsets[e]) += (x, y, z) of each lane.
+HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double* base) {
+  const auto zero = hn::Zero(d);
+  const auto xy_even = hn::InterleaveLower(x, y), xy_odd = hn::InterleaveUpper(d, x, y);
+  const auto z_even = hn::InterleaveLower(z, zero), z_odd = hn::InterleaveUpper(d, z, zero);
+  const V entry[4] = {hn::ConcatLowerLower(d, z_even, xy_even), hn::ConcatLowerLower(d, z_odd, xy_odd),
+                      hn::ConcatUpperUpper(d, z_even, xy_even), hn::ConcatUpperUpper(d, z_odd, xy_odd)};
+  for (int e = 0; e < 4; ++e) {
+    double* record = base + offsets[e];
+    hn::Store(hn::Add(hn::Load(d, record), entry[e]), d, record);
+  }
+}
+
 // The lane sums of f[0..8]: four at a time by a transpose and two additions instead of nine reductions.
 HWY_INLINE void sum_lanes(D d, const V (&f)[9], double (&sums)[9]) {
   for (int first = 0; first < 8; first += 4) {
@@ -62,6 +75,16 @@ HWY_INLINE void load_records(D d, const double* base, const Index* offsets, V& x
   z = hn::GatherIndex(d, base + 2, index);
 }
 
+HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double* base) {
+  double lanes[3][hn::MaxLanes(D())];
+  hn::StoreU(x, d, lanes[0]);
+  hn::StoreU(y, d, lanes[1]);
+  hn::StoreU(z, d, lanes[2]);
+  for (std::size_t e = 0; e < hn::Lanes(d); ++e) {
+    double* record = base + offsets[e];
+    for (int i = 0; i < 3; ++i) record[i] += lanes[i][e];
+  }
+}
 #endif
 
 // One row's blocks as raw pointers, for loops that step through them (in locals: the compiler cannot tell that
@@ -80,8 +103,8 @@ HWY_INLINE RowBlocks<Real> row_blocks(const GradientRows& rows, Index row) {
 }
 
 // Asks the caches for one row (its gradients and record offsets), two 64-byte lines per turn of the loop (the
-// loop's own instructions cost as much as the prefetches). The second line of the last turn may lie past the row:
-// a prefetch never faults.
+// loop's own instructions cost as much as the prefetches). The second line of the last turn may lie past the row: a
+// prefetch never faults.
 HWY_INLINE void prefetch_lines(const void* begin, const void* end) {
   for (const char* line = static_cast<const char*>(begin); line < static_cast<const char*>(end); line += 128) {
     hwy::Prefetch(line);
@@ -139,9 +162,8 @@ void Gather(const GradientRows& rows, const double* u4, Index first, Index prefe
     gather_rows<double>(rows, u4, first, prefetch_end, batch);
 }
 
-void StoreStressRecords(const StressBatch& batch, const double* weights, const bool* skip, double* records) {
+void FirstPiola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]) {
   const hn::ScalableTag<double> d;
-  alignas(64) double P[9][StressBatch::kCapacity];
   for (int p = 0; p < StressBatch::kCapacity; p += static_cast<int>(hn::Lanes(d))) {
     const auto w = hn::LoadU(d, weights + p);
     for (int i = 0; i < 3; ++i)
@@ -152,58 +174,40 @@ void StoreStressRecords(const StressBatch& batch, const double* weights, const b
         hn::Store(hn::Mul(w, sum), d, &P[3 * i + j][p]);
       }
   }
-  // Column j of the record holds (P_0j, P_1j, P_2j); its fourth entry stays the zero it was allocated with.
-  for (int p = 0; p < batch.count; ++p) {
-    double* record = records + static_cast<std::size_t>(kStressRecord) * p;
-    for (int j = 0; j < 3; ++j)
-      for (int i = 0; i < 3; ++i) record[4 * j + i] = skip[p] ? 0.0 : P[3 * i + j][p];
-  }
 }
 
-// f_I = sum_p (w P)_p t_pI with the force's components in the lanes: per entry three multiply-adds of a record's
-// columns by broadcast gradient components. Two entries at a time into separate accumulators (and one per column),
-// so that consecutive multiply-adds do not wait for each other. Each node's sum runs in its entries' order: the
-// same on every thread count.
 template <class Real>
-void node_forces_rows(const TestGradientRows& rows, const double* records, Index begin, Index end, double* f) {
+void scatter_rows(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
+                  const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
   const D d;
-  constexpr int kLanes = static_cast<int>(hn::MaxLanes(D()));
-  constexpr int kParts = 4 / kLanes;  // vectors per record column (1 on AVX2 and AVX-512)
-  const TestGradientEntry<Real>* entries = rows.data<Real>();
-  for (Index node = begin; node < end; ++node) {
-    V sum[2][3][kParts];
-    for (auto& a : sum)
-      for (auto& b : a)
-        for (auto& c : b) c = hn::Zero(d);
-    const TestGradientEntry<Real>* e = entries + rows.begin(node);
-    const TestGradientEntry<Real>* const stop = entries + rows.end(node);
-    const auto add = [&](const TestGradientEntry<Real>& entry, V(&to)[3][kParts]) {
-      const double* record = records + entry.point_record;
-      for (int j = 0; j < 3; ++j) {
-        const V t = hn::Set(d, static_cast<double>(entry.gradient[j]));
-        for (int h = 0; h < kParts; ++h) to[j][h] = hn::MulAdd(hn::Load(d, record + 4 * j + kLanes * h), t, to[j][h]);
+  for (int p = 0; p < count; ++p) {
+    if (skip[p]) continue;
+    V stress[9], mean[3];
+    for (int c = 0; c < 9; ++c) stress[c] = hn::Set(d, P[c][p]);
+    for (int k = 0; k < 3; ++k) mean[k] = hn::Set(d, m3[3 * static_cast<std::size_t>(first + p) + k]);
+    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p);
+    const Real* g = row.gradients;
+    for (const Index* records = row.records; records != row.records_end; records += kBlock, g += 3 * kBlock) {
+      for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
+        V grad[3];
+        load_records(d, xi4, records + j, grad[0], grad[1], grad[2]);
+        for (int k = 0; k < 3; ++k) grad[k] = hn::Add(load_gradients(d, g + k * kBlock + j), hn::Sub(grad[k], mean[k]));
+        V force[3];
+        for (int i = 0; i < 3; ++i)
+          force[i] = hn::MulAdd(stress[3 * i + 2], grad[2],
+                                hn::MulAdd(stress[3 * i + 1], grad[1], hn::Mul(stress[3 * i], grad[0])));
+        add_to_records(d, force[0], force[1], force[2], records + j, f4);
       }
-    };
-    for (; stop - e >= 2; e += 2) {
-      add(e[0], sum[0]);
-      add(e[1], sum[1]);
     }
-    if (e != stop) add(e[0], sum[0]);
-    alignas(32) double total[4];
-    for (int h = 0; h < kParts; ++h) {
-      V v = hn::Add(hn::Add(sum[0][0][h], sum[1][0][h]), hn::Add(sum[0][1][h], sum[1][1][h]));
-      v = hn::Add(v, hn::Add(sum[0][2][h], sum[1][2][h]));
-      hn::Store(v, d, total + kLanes * h);
-    }
-    for (int c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(node) + c] = total[c];
   }
 }
 
-void NodeForces(const TestGradientRows& rows, const double* records, Index begin, Index end, double* f) {
+void Scatter(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
+             const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
   if (rows.precision() == RowPrecision::single_precision)
-    node_forces_rows<float>(rows, records, begin, end, f);
+    scatter_rows<float>(rows, xi4, m3, first, count, P, skip, f4);
   else
-    node_forces_rows<double>(rows, records, begin, end, f);
+    scatter_rows<double>(rows, xi4, m3, first, count, P, skip, f4);
 }
 
 }  // namespace mtled::HWY_NAMESPACE
@@ -212,17 +216,18 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace mtled::force_kernel {
 HWY_EXPORT(Gather);
-HWY_EXPORT(StoreStressRecords);
-HWY_EXPORT(NodeForces);
+HWY_EXPORT(FirstPiola);
+HWY_EXPORT(Scatter);
 
 void gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch) {
   HWY_DYNAMIC_DISPATCH(Gather)(rows, u4, first, prefetch_end, batch);
 }
-void store_stress_records(const StressBatch& batch, const double* weights, const bool* skip, double* records) {
-  HWY_DYNAMIC_DISPATCH(StoreStressRecords)(batch, weights, skip, records);
+void first_piola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]) {
+  HWY_DYNAMIC_DISPATCH(FirstPiola)(batch, weights, P);
 }
-void node_forces(const TestGradientRows& rows, const double* records, Index begin, Index end, double* f) {
-  HWY_DYNAMIC_DISPATCH(NodeForces)(rows, records, begin, end, f);
+void scatter(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
+             const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
+  HWY_DYNAMIC_DISPATCH(Scatter)(rows, xi4, m3, first, count, P, skip, f4);
 }
 }  // namespace mtled::force_kernel
 #endif

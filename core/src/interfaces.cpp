@@ -77,6 +77,8 @@ void Material::stress_batch(StressBatch& batch) const noexcept {
   }
 }
 
+json Material::closed_form() const { return nullptr; }
+
 std::string_view to_string(NeedlePhase phase) {
   return phase == NeedlePhase::penetration ? "penetration" : "indentation";
 }

@@ -76,50 +76,6 @@ Vec3 GradientRows::gradient(Index row, int k) const {
   return {double_gradients_[i], double_gradients_[i + kBlock], double_gradients_[i + 2 * kBlock]};
 }
 
-void TestGradientRows::assign(std::vector<std::int64_t> offsets, RowPrecision precision) {
-  precision_ = precision;
-  offsets_ = std::move(offsets);
-  const auto n = static_cast<std::size_t>(entries());
-  double_entries_.assign(precision == RowPrecision::double_precision ? n : 0, TestGradientEntry<double>{});
-  single_entries_.assign(precision == RowPrecision::single_precision ? n : 0, TestGradientEntry<float>{});
-}
-
-void TestGradientRows::set(std::int64_t entry, Index point, const Vec3& gradient) {
-  const auto record = static_cast<std::int32_t>(kStressRecord * point);
-  const auto e = static_cast<std::size_t>(entry);
-  if (precision_ == RowPrecision::single_precision)
-    single_entries_[e] = {{static_cast<float>(gradient[0]), static_cast<float>(gradient[1]), static_cast<float>(gradient[2])}, record};
-  else
-    double_entries_[e] = {{gradient[0], gradient[1], gradient[2]}, record};
-}
-
-Index TestGradientRows::point(std::int64_t entry) const {
-  const auto e = static_cast<std::size_t>(entry);
-  return (precision_ == RowPrecision::single_precision ? single_entries_[e].point_record
-                                                       : double_entries_[e].point_record) / kStressRecord;
-}
-
-Vec3 TestGradientRows::gradient(std::int64_t entry) const {
-  const auto e = static_cast<std::size_t>(entry);
-  if (precision_ == RowPrecision::single_precision) {
-    const auto& g = single_entries_[e].gradient;
-    return {g[0], g[1], g[2]};
-  }
-  const auto& g = double_entries_[e].gradient;
-  return {g[0], g[1], g[2]};
-}
-
-std::vector<Index> TestGradientRows::balanced_shares(int parts) const {
-  std::vector<Index> first(static_cast<std::size_t>(parts) + 1, nodes());
-  first[0] = 0;
-  for (int k = 1; k < parts; ++k) {
-    const std::int64_t target = entries() * k / parts;
-    first[static_cast<std::size_t>(k)] =
-        static_cast<Index>(std::lower_bound(offsets_.begin(), offsets_.end() - 1, target) - offsets_.begin());
-  }
-  return first;
-}
-
 Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
              std::vector<std::shared_ptr<const Material>> region_materials, Options options)
     : mesh_(std::move(mesh)), shape_functions_(std::move(shape_functions)), materials_(std::move(region_materials)) {
@@ -144,15 +100,15 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   build_integration_points(options.integration_points_per_tet);
   build_supports(options.precision);
   build_time_steps();
-  xi_.assign(static_cast<std::size_t>(node_count()), Vec3::Zero());
-  xi_mean_.assign(static_cast<std::size_t>(integration_point_count()), Vec3::Zero());
+  const std::size_t padded = 4 * (static_cast<std::size_t>(node_count()) + 1);
+  xi_.assign(padded, 0.0);
+  xi_mean_.assign(3 * static_cast<std::size_t>(integration_point_count()), 0.0);
   if (options.consistent_integration) build_integration_correction();
-  build_test_gradients();
-  padded_u_.assign(4 * (static_cast<std::size_t>(node_count()) + 1), 0.0);
-  stress_records_.assign(static_cast<std::size_t>(kStressRecord) * static_cast<std::size_t>(integration_point_count()), 0.0);
+  padded_u_.assign(padded, 0.0);
   team_ = std::make_unique<ThreadTeam>(options.threads > 0 ? options.threads : omp_get_max_threads());
-  node_shares_ = test_rows_.balanced_shares(team_->size());
-  thread_first_bad_.assign(static_cast<std::size_t>(team_->size()), std::numeric_limits<Index>::max());
+  thread_forces_.resize(static_cast<std::size_t>(team_->size()));
+  for (auto& buffer : thread_forces_) buffer.assign(padded, 0.0);
+  thread_first_bad_.assign(thread_forces_.size(), std::numeric_limits<Index>::max());
   volumetric_ = std::move(options.volumetric);
   if (volumetric_) volumetric_->setup(*this);
 }
@@ -340,28 +296,15 @@ void Model::build_integration_correction() {
   }
   for (Index ip = 0; ip < integration_point_count(); ++ip)
     for (int k = 0; k < ip_rows_.size(ip); ++k) residual[ip_rows_.node(ip, k)] -= ip_weight_[ip] * ip_rows_.gradient(ip, k);
-  xi_ = solve_integration_correction(residual);
+  const std::vector<Vec3> xi = solve_integration_correction(residual);
+  for (Index i = 0; i < node_count(); ++i)
+    for (int d = 0; d < 3; ++d) xi_[4 * static_cast<std::size_t>(i) + d] = xi[i][d];
   for (Index ip = 0; ip < integration_point_count(); ++ip) {
     Vec3 mean = Vec3::Zero();
-    for (int k = 0; k < ip_rows_.size(ip); ++k) mean += xi_[ip_rows_.node(ip, k)];
-    xi_mean_[ip] = mean / ip_rows_.size(ip);
+    for (int k = 0; k < ip_rows_.size(ip); ++k) mean += xi[ip_rows_.node(ip, k)];
+    mean /= ip_rows_.size(ip);
+    for (int d = 0; d < 3; ++d) xi_mean_[3 * static_cast<std::size_t>(ip) + d] = mean[d];
   }
-}
-
-void Model::build_test_gradients() {
-  const Index points = integration_point_count();
-  const SupportRows node_points = transpose_rows(points, node_count(), [&](Index ip, auto&& add) {
-    for (int k = 0; k < ip_rows_.size(ip); ++k) add(ip_rows_.node(ip, k));
-  });
-  test_rows_.assign(node_points.offsets, ip_rows_.precision());
-  // Entry e of node I names point node_points.nodes[e]; walking each point's row in the transpose's order puts its
-  // gradient at the next free entry of its node.
-  std::vector<std::int64_t> next(node_points.offsets.begin(), node_points.offsets.end() - 1);
-  for (Index ip = 0; ip < points; ++ip)
-    for (int k = 0; k < ip_rows_.size(ip); ++k) {
-      const Index node = ip_rows_.node(ip, k);
-      test_rows_.set(next[static_cast<std::size_t>(node)]++, ip, ip_rows_.gradient(ip, k) + gradient_correction(ip, node));
-    }
 }
 
 // The corrections: with delta_I(p) = xi_I - mean_{J in p} xi_J, node I's constraint sum_p w_p delta_I(p) = r_I
@@ -460,11 +403,24 @@ void Model::pad_displacement(std::span<const double> u, int thread) const {
     for (std::size_t c = 0; c < 3; ++c) padded_u_[4 * static_cast<std::size_t>(i) + c] = u[3 * static_cast<std::size_t>(i) + c];
 }
 
-// The stress records of integration points begin .. end - 1, in batches of consecutive points with one material.
-Index Model::point_stresses(Index begin, Index end) const {
+// A team task: sums the per-thread buffers in a fixed order over thread `thread`'s share of the nodes.
+void Model::reduce_thread_forces(std::span<double> f, int thread) const {
+  const auto [begin, end] = ThreadTeam::share(node_count(), thread, team_->size());
+  for (std::int64_t i = begin; i < end; ++i)
+    for (std::size_t c = 0; c < 3; ++c) {
+      double sum = 0.0;
+      for (const auto& buffer : thread_forces_) sum += buffer[4 * static_cast<std::size_t>(i) + c];
+      f[3 * static_cast<std::size_t>(i) + c] = sum;
+    }
+}
+
+// The forces of integration points begin .. end - 1 into f4, in batches of consecutive points with one
+// material. Returns the first inadmissible point, or the largest Index.
+Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
   constexpr int kCapacity = StressBatch::kCapacity;
   Index first_bad = std::numeric_limits<Index>::max();
   StressBatch batch{};
+  double P[9][kCapacity];
   double weights[kCapacity];
   bool skip[kCapacity];
   for (Index first = begin; first < end; first += batch.count) {
@@ -479,16 +435,10 @@ Index Model::point_stresses(Index begin, Index end) const {
       skip[p] = p < count && !batch.admissible[p];
       if (skip[p]) first_bad = std::min(first_bad, first + p);
     }
-    force_kernel::store_stress_records(batch, weights, skip,
-                                       stress_records_.data() + static_cast<std::size_t>(kStressRecord) * first);
+    force_kernel::first_piola(batch, weights, P);
+    force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, f4);
   }
   return first_bad;
-}
-
-// A team task: the forces of thread `thread`'s share of the nodes (shares of about equal entries).
-void Model::node_forces(std::span<double> f, int thread) const {
-  force_kernel::node_forces(test_rows_, stress_records_.data(), node_shares_[static_cast<std::size_t>(thread)],
-                            node_shares_[static_cast<std::size_t>(thread) + 1], f.data());
 }
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
@@ -496,13 +446,16 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
   const std::int64_t n = integration_point_count();
   std::vector<Index>& first_bad = thread_first_bad_;
   team_->run([&](int thread) {
+    AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
+    std::fill(local.begin(), local.end(), 0.0);
     pad_displacement(u, thread);
     team_->barrier();
     // Contiguous shares, so that each thread's batches are consecutive points.
     const auto [begin, end] = ThreadTeam::share(n, thread, team_->size());
-    first_bad[static_cast<std::size_t>(thread)] = point_stresses(static_cast<Index>(begin), static_cast<Index>(end));
+    first_bad[static_cast<std::size_t>(thread)] =
+        accumulate_forces(static_cast<Index>(begin), static_cast<Index>(end), local.data());
     team_->barrier();
-    node_forces(f, thread);
+    reduce_thread_forces(f, thread);
   });
   const Index bad = *std::min_element(first_bad.begin(), first_bad.end());
   return bad == std::numeric_limits<Index>::max() ? -1 : bad;
@@ -536,27 +489,31 @@ Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F)
 
 void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f) const {
   const Index n = integration_point_count();
+  const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
   team_->run([&](int thread) {
-    const auto [begin, end] = ThreadTeam::share(n, thread, team_->size());
-    for (auto ip = static_cast<std::size_t>(begin); ip < static_cast<std::size_t>(end); ++ip) {
-      double* record = stress_records_.data() + kStressRecord * ip;
-      for (int j = 0; j < 3; ++j)
-        for (int i = 0; i < 3; ++i) record[4 * j + i] = weighted_stress[ip](i, j);
+    AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
+    std::fill(local.begin(), local.end(), 0.0);
+    double P[9][StressBatch::kCapacity];
+    const bool skip[StressBatch::kCapacity] = {};
+    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, team_->size());
+    for (auto b = batch_begin; b < batch_end; ++b) {
+      const auto first = static_cast<Index>(b * StressBatch::kCapacity);
+      const int count = std::min<Index>(StressBatch::kCapacity, n - first);
+      for (int p = 0; p < count; ++p)
+        for (int c = 0; c < 9; ++c) P[c][p] = weighted_stress[first + p](c / 3, c % 3);
+      force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, local.data());
     }
     team_->barrier();
-    node_forces(f, thread);
+    reduce_thread_forces(f, thread);
   });
 }
 
 std::int64_t Model::streamed_bytes_per_force_evaluation() const {
-  const bool single = ip_rows_.precision() == RowPrecision::single_precision;
-  const std::int64_t real = single ? 4 : 8;
-  const std::int64_t gather_rows = ip_rows_.blocks() * GradientRows::kBlock * (static_cast<std::int64_t>(sizeof(Index)) + 3 * real);
-  const std::int64_t node_rows =
-      test_rows_.entries() * (single ? sizeof(TestGradientEntry<float>) : sizeof(TestGradientEntry<double>));
-  const std::int64_t points = integration_point_count() * (8 + 2 + 2 * 8 * kStressRecord);
-  const std::int64_t nodes = node_count() * (4 + 3) * 8;
-  return gather_rows + node_rows + points + nodes;
+  const std::int64_t real = ip_rows_.precision() == RowPrecision::single_precision ? 4 : 8;
+  const std::int64_t rows = ip_rows_.blocks() * GradientRows::kBlock * (static_cast<std::int64_t>(sizeof(Index)) + 3 * real);
+  const std::int64_t points = integration_point_count() * (8 + 3 * 8 + 2);
+  const std::int64_t per_node = 4 * 8 * (2 + 3 * team_->size()) + 3 * 8 * 2;  // u and xi; buffers; u in, f out
+  return rows + points + (static_cast<std::int64_t>(node_count()) + 1) * per_node;
 }
 
 double Model::strain_energy(std::span<const double> u) const {

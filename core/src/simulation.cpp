@@ -41,9 +41,7 @@ void guarded(const Parameters& parameters, const std::string& what, Call call) {
 
 }  // namespace
 
-namespace {
-
-TetMesh load_mesh(const Scene& scene, PluginCatalog& catalog) {
+TetMesh load_scene_mesh(const Scene& scene, PluginCatalog& catalog) {
   auto source = build<MeshSource>(catalog, scene.mesh);
   MeshContext context{scene.document.directory(), 1};
   TetMesh mesh;
@@ -53,6 +51,8 @@ TetMesh load_mesh(const Scene& scene, PluginCatalog& catalog) {
   check_mesh(mesh);
   return mesh;
 }
+
+namespace {
 
 // One material per mesh region: a block with "region" fills that region, one without fills every other.
 std::vector<std::shared_ptr<const Material>> region_materials(const Scene& scene, PluginCatalog& catalog,
@@ -95,11 +95,16 @@ std::vector<std::shared_ptr<const Material>> region_materials(const Scene& scene
 }  // namespace
 
 Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
-  TetMesh mesh = load_mesh(scene, catalog);
+  // The backend first: one that cannot run here (no device) stops the run before the setup's work.
+  engine_ = scene.backend ? build<StepEngine>(catalog, *scene.backend) : make_cpu_engine();
+  TetMesh mesh = load_scene_mesh(scene, catalog);
   auto materials = region_materials(scene, catalog, mesh);
   build_model(scene, catalog, std::move(mesh), std::move(materials));
   build_drivers(scene, catalog);
-  build_engine(scene, catalog);
+  if (scene.backend)
+    guarded(scene.backend->parameters, "setting up the backend", [&] { engine_->setup(*model_); });
+  else
+    engine_->setup(*model_);
   // The state: at rest, the constraints applied.
   const std::size_t dofs = 3 * static_cast<std::size_t>(model_->node_count());
   mass_ = model_->lumped_mass();
@@ -112,19 +117,6 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   engine_->set_state(u, std::vector<double>(dofs, 0.0));
 
   integrator_ = build<TimeIntegrator>(catalog, scene.integrator);
-}
-
-// The scene's backend, or the kernel's own CPU engine when it names none.
-void Simulation::build_engine(const Scene& scene, PluginCatalog& catalog) {
-  if (scene.backend)
-    engine_ = build<StepEngine>(catalog, *scene.backend);
-  else
-    engine_ = make_cpu_engine();
-  const Parameters* parameters = scene.backend ? &scene.backend->parameters : nullptr;
-  if (parameters != nullptr)
-    guarded(*parameters, "setting up the backend", [&] { engine_->setup(*model_); });
-  else
-    engine_->setup(*model_);
 }
 
 void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,

@@ -25,7 +25,7 @@ class NeoHookeanMaterial final : public Material {
   }
 
   explicit NeoHookeanMaterial(const Parameters& p)
-      : mu_(p.number("mu")), volumetric_(p.number("D")), density_(p.number("density")) {}
+      : mu_(p.number("mu")), D_(p.number("D")), volumetric_(D_), density_(p.number("density")) {}
 
   double density() const override { return density_; }
   double p_wave_modulus() const override { return hyperelastic::p_wave_modulus(mu_, volumetric_); }
@@ -49,6 +49,10 @@ class NeoHookeanMaterial final : public Material {
     hyperelastic::neo_hookean_stress_batch({mu_, volumetric_.bulk_modulus()}, batch);
   }
 
+  json closed_form() const override {
+    return {{"law", "neo_hookean"}, {"mu", mu_}, {"D", D_}};
+  }
+
   double energy(const Mat3& F) const noexcept override {
     double J;
     if (!hyperelastic::admissible(F, J)) return std::numeric_limits<double>::quiet_NaN();
@@ -57,6 +61,7 @@ class NeoHookeanMaterial final : public Material {
 
  private:
   double mu_;
+  double D_;
   hyperelastic::VolumetricPenalty volumetric_;
   double density_;
 };

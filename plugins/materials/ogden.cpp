@@ -42,7 +42,8 @@ class OgdenMaterial final : public Material {
   explicit OgdenMaterial(const Parameters& p)
       : mu_(p.number("mu")),
         alpha_(p.number("alpha")),
-        volumetric_(p.number("D")),
+        D_(p.number("D")),
+        volumetric_(D_),
         density_(p.number("density")),
         half_alpha_(0.5 * alpha_),
         energy_factor_(2.0 * mu_ / (alpha_ * alpha_)),
@@ -80,6 +81,10 @@ class OgdenMaterial final : public Material {
     hyperelastic::ogden_stress_batch({half_alpha_, stress_factor_, volumetric_.bulk_modulus()}, batch);
   }
 
+  json closed_form() const override {
+    return {{"law", "ogden"}, {"mu", mu_}, {"alpha", alpha_}, {"D", D_}};
+  }
+
   double energy(const Mat3& F) const noexcept override {
     double J;
     if (!hyperelastic::admissible(F, J)) return std::numeric_limits<double>::quiet_NaN();
@@ -97,6 +102,7 @@ class OgdenMaterial final : public Material {
 
   double mu_;
   double alpha_;
+  double D_;
   hyperelastic::VolumetricPenalty volumetric_;
   double density_;
   double half_alpha_;

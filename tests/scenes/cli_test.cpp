@@ -61,12 +61,11 @@ TEST(Cli, RunsTheSmallCubeAndWritesTheContractOutputs) {
 }
 
 // A whole run on 1 and on 2 threads, on a cloud large enough (4,770 nodes) that the constraint projection's
-// row loops and the force kernel's shares all run on the team. Every sum whose order could depend on the shares runs
-// in one order whatever the thread count (each node sums its own forces, each constraint row its own product; the
-// relaxation's Rayleigh quotient runs on one thread), so the two runs must agree to the last bit: a share that missed
-// or repeated points or rows would move the answer. A node whose update went missing would keep the relaxation from
-// settling: the step limit, more than twice the steps taken, turns that into exit 3 instead of a hang (checked by
-// leaving one node per share out of the update).
+// row loops and the force kernel's shares all run on the team: a share that missed or repeated points or rows
+// would move the answer far more than the summation order of the per-thread force buffers, which is all that
+// separates 1 thread from 2 (a few ulps per evaluation; measured NRMSE 1.8e-15 after 1,348 steps). A node whose
+// update went missing would keep the relaxation from settling: the step limit, more than twice the steps taken,
+// turns that into exit 3 instead of a hang (checked by leaving one node per share out of the update).
 TEST(Cli, ARunOnALargeCloudIsTheSameOnOneAndTwoThreads) {
   const fs::path folder = test::scratch_dir("cli-threads");
   std::vector<fs::path> outs;
@@ -81,7 +80,10 @@ TEST(Cli, ARunOnALargeCloudIsTheSameOnOneAndTwoThreads) {
   ASSERT_EQ(two["threads"], 2);
   ASSERT_GE(two["nodes"].get<int>(), 4000);
   EXPECT_EQ(one["steps"], two["steps"]);
-  EXPECT_EQ(test::read_text(outs[0] / "result.vtu"), test::read_text(outs[1] / "result.vtu"));
+  const auto compared = test::run_mtled({"compare", outs[0].string(), outs[1].string(), "--json"});
+  ASSERT_EQ(compared.exit_code, 0) << compared.output;
+  for (const auto& [component, nrmse] : json::parse(compared.output)["nrmse"].items())
+    EXPECT_LE(nrmse.get<double>(), 1e-10) << component;
 }
 
 // The backend is chosen in the scene or with --backend. "cpu" is the kernel's own engine, named: the same run, to

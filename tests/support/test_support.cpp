@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <array>
+#include <cstdlib>
 #include <cstdio>
 #include <fstream>
 #include <random>
@@ -18,9 +19,18 @@ namespace mtled::test {
 OneThread::OneThread() : saved_(omp_get_max_threads()) { omp_set_num_threads(1); }
 OneThread::~OneThread() { omp_set_num_threads(saved_); }
 
-fs::path source_dir() { return MTLED_TEST_SOURCE_DIR; }
-fs::path binary_dir() { return MTLED_TEST_BINARY_DIR; }
-fs::path plugin_dir() { return MTLED_TEST_PLUGIN_DIR; }
+namespace {
+// The build tree's paths, unless the environment names others: a test binary copied into a relocatable bundle
+// (scripts/gpu-bundle.sh) runs where that build tree does not exist.
+fs::path configured(const char* variable, const char* built_in) {
+  const char* value = std::getenv(variable);
+  return value != nullptr && *value != '\0' ? fs::path(value) : fs::path(built_in);
+}
+}  // namespace
+
+fs::path source_dir() { return configured("MTLED_TEST_SOURCE_DIR", MTLED_TEST_SOURCE_DIR); }
+fs::path binary_dir() { return configured("MTLED_TEST_BINARY_DIR", MTLED_TEST_BINARY_DIR); }
+fs::path plugin_dir() { return configured("MTLED_TEST_PLUGIN_DIR", MTLED_TEST_PLUGIN_DIR); }
 
 fs::path scratch_dir(const std::string& name) {
   // ctest runs each test in its own process, in parallel: the folder is unique to the running test.
@@ -127,7 +137,7 @@ CommandResult run_mtled(const std::vector<std::string>& arguments, const std::ve
       command += " " + quote(e);
     }
   }
-  command += " " + quote(MTLED_EXECUTABLE);
+  command += " " + quote(configured("MTLED_TEST_EXECUTABLE", MTLED_EXECUTABLE).string());
   for (const auto& a : arguments) command += " " + quote(a);
   command += " 2>&1";
   CommandResult result;

@@ -100,59 +100,6 @@ inline const float* GradientRows::block_gradients<float>(std::int64_t block) con
   return single_gradients_.data() + 3 * kBlock * block;
 }
 
-// One entry of a node's list in TestGradientRows: the test-function gradient of the node at one integration point
-// and where that point's stress record starts.
-template <class Real>
-struct TestGradientEntry {
-  Real gradient[3];           // grad N_I + (the consistent-integration correction of I at the point)
-  std::int32_t point_record;  // kStressRecord x the integration point: its record in the per-point stress array
-};
-static_assert(sizeof(TestGradientEntry<float>) == 16 && sizeof(TestGradientEntry<double>) == 32);
-
-// The stress record of an integration point the node-centric assembly reads: the columns of its weighted first
-// Piola-Kirchhoff stress w P, each padded to 4 doubles (P_0j, P_1j, P_2j, 0), so that f_I += w P t is three
-// multiply-adds of 4-wide vectors.
-constexpr int kStressRecord = 12;
-
-// The transpose of the supports, for the node-centric assembly of the internal forces: node I's entries list the
-// integration points whose supports hold I, in point order, each with its test-function gradient there. Every
-// node's force is then its own sum, f_I = sum_p (w P)_p t_pI, in one order whatever the thread count: no point
-// writes into another's force, there are no per-thread buffers to add up, and the layout is the one a GPU's
-// one-thread-per-node pass needs.
-class TestGradientRows {
- public:
-  // Entries of node I: begin(I) .. end(I) - 1.
-  void assign(std::vector<std::int64_t> offsets, RowPrecision precision);
-  void set(std::int64_t entry, Index point, const Vec3& gradient);
-
-  RowPrecision precision() const { return precision_; }
-  Index nodes() const { return offsets_.empty() ? 0 : static_cast<Index>(offsets_.size() - 1); }
-  std::int64_t begin(Index node) const { return offsets_[node]; }
-  std::int64_t end(Index node) const { return offsets_[node + 1]; }
-  std::int64_t entries() const { return offsets_.empty() ? 0 : offsets_.back(); }
-  Index point(std::int64_t entry) const;
-  Vec3 gradient(std::int64_t entry) const;
-  template <class Real>
-  const TestGradientEntry<Real>* data() const;
-  // The first node of each of `parts` contiguous shares with about equal entries (parts + 1 values).
-  std::vector<Index> balanced_shares(int parts) const;
-
- private:
-  RowPrecision precision_ = RowPrecision::double_precision;
-  std::vector<std::int64_t> offsets_;
-  AlignedVector<TestGradientEntry<double>> double_entries_;  // the one the precision names is filled
-  AlignedVector<TestGradientEntry<float>> single_entries_;
-};
-
-template <>
-inline const TestGradientEntry<double>* TestGradientRows::data<double>() const {
-  return double_entries_.data();
-}
-template <>
-inline const TestGradientEntry<float>* TestGradientRows::data<float>() const {
-  return single_entries_.data();
-}
-
 struct SupportStatistics {
   Index min = 0, max = 0;
   double mean = 0.0;
@@ -203,7 +150,6 @@ class Model {
   const Material& ip_material(Index ip) const { return *materials_[ip_material_[ip]]; }
   ThreadTeam& team() const { return *team_; }
   const GradientRows& ip_supports() const { return ip_rows_; }      // gradients
-  const TestGradientRows& node_test_gradients() const { return test_rows_; }  // the supports transposed
   const SupportRows& node_interpolation() const { return node_rows_; }  // values at the nodes
   SupportStatistics ip_support_statistics() const { return ip_stats_; }
 
@@ -216,18 +162,22 @@ class Model {
 
   // The correction of node I's test-function gradient at integration point ip, xi_I - mean over ip's support of
   // xi_J (zero when consistent integration is off).
-  Vec3 gradient_correction(Index ip, Index node) const { return xi_[node] - xi_mean_[ip]; }
+  Vec3 gradient_correction(Index ip, Index node) const {
+    const double* xi = xi_.data() + 4 * static_cast<std::size_t>(node);
+    const double* mean = xi_mean_.data() + 3 * static_cast<std::size_t>(ip);
+    return {xi[0] - mean[0], xi[1] - mean[1], xi[2] - mean[2]};
+  }
 
   // Internal nodal forces f_I = sum_ip w F S (grad N_I + gradient_correction(ip, I)) for nodal parameters u (3
   // per node), or the volumetric treatment's. Returns -1, or the lowest-numbered integration point whose F is
-  // inadmissible (J <= 0 or not finite); f is then incomplete. Two passes on the model's ThreadTeam: the stresses
-  // over shares of the integration points, then each node's sum over its points (node_test_gradients), so the
-  // result does not depend on the thread count. Not re-entrant.
+  // inadmissible (J <= 0 or not finite); f is then incomplete. Parallel over integration points (the model's
+  // ThreadTeam); not re-entrant.
   Index internal_forces(std::span<const double> u, std::span<double> f) const;
   double strain_energy(std::span<const double> u) const;
-  // The fewest bytes one internal_forces() call must move through memory: both passes' rows once (padding included),
-  // each point's weight, material and stress record (written, then read), the displacements read and the forces
-  // written once. Over the call's time, the kernel's achieved memory bandwidth.
+  // The fewest bytes one internal_forces() call must move through memory: the rows once (padding included; the
+  // scatter re-reads them from the cache), each point's weight, mean correction and material, the per-node
+  // displacements, corrections and forces once (each thread's force buffer zeroed, filled and summed). Over the
+  // call's time, the kernel's achieved memory bandwidth.
   std::int64_t streamed_bytes_per_force_evaluation() const;
   const VolumetricTreatment* volumetric_treatment() const { return volumetric_.get(); }
 
@@ -252,13 +202,11 @@ class Model {
   void build_time_steps();
   void build_integration_correction();
   std::vector<Vec3> solve_integration_correction(std::vector<Vec3> residual) const;
-  void build_test_gradients();
-  // Team tasks: u into the padded per-node layout the gather reads (4 per node, then the padding node's zeros), over
-  // thread `thread`'s share of the nodes; the stress records of points begin .. end - 1 (returns the first
-  // inadmissible one, or the largest Index); the forces of thread `thread`'s share of the nodes from the records.
+  // Team tasks over thread `thread`'s share of the nodes: u into the padded per-node layout the kernel reads (4
+  // per node, then the padding node's zeros); the per-thread force buffers summed into f.
   void pad_displacement(std::span<const double> u, int thread) const;
-  Index point_stresses(Index begin, Index end) const;
-  void node_forces(std::span<double> f, int thread) const;
+  Index accumulate_forces(Index begin, Index end, double* f4) const;
+  void reduce_thread_forces(std::span<double> f, int thread) const;
   // Support lists of arbitrary points (at least the shape functions' minimum); throws InputError naming `what`.
   std::vector<std::vector<Index>> find_supports(const std::vector<Vec3>& points, const char* what) const;
   // Shape functions at the points on those supports: store(r, k, value, gradient) for each entry, gradients only
@@ -282,17 +230,15 @@ class Model {
   std::vector<Index> ip_tet_;
   std::vector<std::uint16_t> ip_material_;
   GradientRows ip_rows_;
-  TestGradientRows test_rows_;
   SupportRows node_rows_;
   SupportStatistics ip_stats_;
   std::vector<double> ip_dt_;
-  std::vector<Vec3> xi_;       // per node: the consistent-integration correction
-  std::vector<Vec3> xi_mean_;  // per integration point: the mean of xi_I over its support
-  // The displacement being evaluated in the gather's layout, 4 doubles per node (x, y, z, 0) and one padding node
-  // of zeros; the integration points' stress records (kStressRecord doubles each); the nodes each thread sums.
+  // The force kernel's per-node arrays, 4 doubles per node (x, y, z, 0) and one padding node of zeros: the
+  // gradient correction, the displacement being evaluated, and one force accumulator per thread.
+  AlignedVector<double> xi_;
+  std::vector<double> xi_mean_;  // per integration point: the mean of xi_I over its support (3 doubles)
   mutable AlignedVector<double> padded_u_;
-  mutable AlignedVector<double> stress_records_;
-  std::vector<Index> node_shares_;
+  mutable std::vector<AlignedVector<double>> thread_forces_;
   mutable std::vector<Index> thread_first_bad_;
   std::unique_ptr<ThreadTeam> team_;  // the time step's threads (setup loops use OpenMP)
 

@@ -41,6 +41,10 @@ class Material {
   // law overrides it to vectorise across the points, and must then agree with stress() to round-off (the
   // material conformance suite checks both on the same deformations).
   virtual void stress_batch(StressBatch& batch) const noexcept;
+  // The law by name with its constants, for a backend that evaluates stresses itself (a GPU's): {"law": "ogden",
+  // "mu", "alpha", "D"} or {"law": "neo_hookean", "mu", "D"}. Null (the default) when the law offers none: such a
+  // backend then refuses the scene, naming the material.
+  virtual json closed_form() const;
 };
 
 }  // namespace mtled

@@ -1,0 +1,433 @@
+// `cuda`: the time step on an NVIDIA GPU. Everything precomputed in the reference configuration (the rows of both
+// force passes, the weights, the laws' constants, the masses) and the state (u_n, u_(n-1), the prediction, the
+// forces) stay on the device; a step is a few kernels (kernels.cu). Per step the host reads back the constraint
+// products' rows, the step's sums and, for the drivers, u_n (3 doubles per node), and sends the constraint
+// multipliers; describe() counts those bytes. Laws: the ones whose Material::closed_form() the device knows (Ogden,
+// neo-Hookean); no volumetric treatment yet. Without a usable device the run stops at setup with exit 2.
+#include <climits>
+#include <map>
+#include <memory>
+
+#include "device_layout.hpp"
+#include "device_memory.hpp"
+#include "kernels.hpp"
+#include "mtled/constraints.hpp"
+#include "mtled/errors.hpp"
+#include "mtled/log.hpp"
+#include "mtled/model.hpp"
+#include "mtled/plugin.hpp"
+
+namespace mtled {
+namespace {
+
+using cuda::check;
+using cuda::DeviceBuffer;
+using cuda::PinnedBuffer;
+
+// Both force passes' rows on the device, in the precision the model stores them in.
+class DeviceRows {
+ public:
+  virtual ~DeviceRows() = default;
+  // f4 = f_int(u4) (records: the points' stress records, first_bad: the lowest inadmissible point).
+  virtual void forces(const double* u4, double* f4, double* records, int* first_bad, cudaStream_t stream) const = 0;
+  virtual std::int64_t bytes() const = 0;  // what one evaluation streams of them
+};
+
+template <class Real>
+class DeviceRowsOf final : public DeviceRows {
+ public:
+  DeviceRowsOf(const cuda::DeviceLayout<Real>& layout, const std::vector<double>& weights,
+               const std::vector<std::uint16_t>& materials, const std::vector<cuda::Law>& laws) {
+    upload(layout.point_rows, points_);
+    upload(layout.node_rows, nodes_);
+    weight_.upload(weights);
+    material_.upload(materials);
+    laws_.upload(laws);
+    point_rows_ = layout.points;
+    node_rows_ = layout.nodes;
+  }
+
+  void forces(const double* u4, double* f4, double* records, int* first_bad, cudaStream_t stream) const override {
+    cuda::PointPass<Real> points;
+    points.rows = view(points_, point_rows_);
+    points.weight = weight_.data();
+    points.material = material_.data();
+    points.laws = laws_.data();
+    points.u4 = u4;
+    points.records = records;
+    points.first_bad = first_bad;
+    cuda::NodePass<Real> nodes;
+    nodes.rows = view(nodes_, node_rows_);
+    nodes.records = records;
+    nodes.f4 = f4;
+    cuda::internal_forces(points, nodes, stream);
+    check(cudaGetLastError(), "launching the force kernel");
+  }
+
+  std::int64_t bytes() const override {
+    const auto per_element = static_cast<std::int64_t>(sizeof(std::int32_t) + 3 * sizeof(Real));
+    return (points_.elements + nodes_.elements) * per_element;
+  }
+
+ private:
+  struct Rows {
+    DeviceBuffer<std::int64_t> slice_begin;
+    DeviceBuffer<std::int32_t> column, row;
+    DeviceBuffer<Real> gx, gy, gz;
+    std::int64_t elements = 0;
+  };
+  static void upload(const cuda::SlicedRows<Real>& from, Rows& to) {
+    to.slice_begin.upload(from.slice_begin);
+    to.column.upload(from.column);
+    to.row.upload(from.row);
+    to.gx.upload(from.gx);
+    to.gy.upload(from.gy);
+    to.gz.upload(from.gz);
+    to.elements = from.elements();
+  }
+  static cuda::SlicedView<Real> view(const Rows& rows, std::int64_t count) {
+    return {rows.slice_begin.data(), rows.column.data(), rows.gx.data(), rows.gy.data(), rows.gz.data(),
+            rows.row.data(), count};
+  }
+
+  Rows points_, nodes_;
+  std::int64_t point_rows_ = 0, node_rows_ = 0;
+  DeviceBuffer<double> weight_;
+  DeviceBuffer<std::uint16_t> material_;
+  DeviceBuffer<cuda::Law> laws_;
+};
+
+// A constraint block's Phi on the device, as of the block's revision.
+struct DeviceBlock {
+  long revision = -1;
+  cuda::ConstraintView view;
+  DeviceBuffer<std::int64_t> row_offsets, node_offsets;
+  DeviceBuffer<std::int32_t> row_nodes, node_list, node_rows;
+  DeviceBuffer<double> row_values, node_values, values;  // values: rows x k, the products and the multipliers
+};
+
+class CudaBackend final : public StepEngine {
+ public:
+  static void declare(ComponentDeclaration& d) {
+    d.summary(
+        "An NVIDIA GPU: the force kernel, the update, the constraint projection's products and the step's sums run "
+        "on the device, where the state stays; built when CMake finds the CUDA toolkit. Supports the Ogden and "
+        "neo-Hookean laws, no volumetric treatment yet (docs/gpu.md).");
+    d.integer("device").unit("1").non_negative().defaults(0).doc(
+        "which GPU (CUDA's device number, as nvidia-smi lists them)");
+    d.example({{"device", 0}});
+  }
+
+  // Finds the device at once, before the scene's mesh and model are built: a run that cannot use it stops in a
+  // second, not after the setup.
+  explicit CudaBackend(const Parameters& p) : pointer_(p.pointer()), device_(static_cast<int>(p.integer("device"))) {
+    select_device();
+  }
+
+  ~CudaBackend() override {
+    if (stream_ != nullptr) cudaStreamDestroy(stream_);
+    for (cudaEvent_t e : {start_, stop_})
+      if (e != nullptr) cudaEventDestroy(e);
+  }
+
+  void setup(const Model& model) override {
+    check(cudaSetDevice(device_), "cudaSetDevice");
+    if (model.volumetric_treatment() != nullptr)
+      refuse("the cuda backend does not support a volumetric treatment yet: leave out /volumetric or run on the CPU "
+             "(leave out /backend, or --backend cpu)");
+    nodes_ = model.node_count();
+    points_ = model.integration_point_count();
+    std::vector<double> weights(model.ip_weights().begin(), model.ip_weights().end());
+    std::vector<std::uint16_t> materials(static_cast<std::size_t>(points_));
+    const std::vector<cuda::Law> laws = read_laws(model, materials);
+    if (model.ip_supports().precision() == RowPrecision::single_precision)
+      rows_ = std::make_unique<DeviceRowsOf<float>>(cuda::build_device_layout<float>(model), weights, materials, laws);
+    else
+      rows_ = std::make_unique<DeviceRowsOf<double>>(cuda::build_device_layout<double>(model), weights, materials, laws);
+    precision_ = model.ip_supports().precision() == RowPrecision::single_precision ? "single" : "double";
+    const std::size_t vector = 4 * (static_cast<std::size_t>(nodes_) + 1);  // and the zero sink node
+    for (auto* v : {&u_, &u_previous_, &prediction_, &free_, &f_, &f_previous_, &f_ext_, &scratch_u_, &scratch_f_})
+      v->resize(vector);
+    mass_.resize(static_cast<std::size_t>(nodes_));
+    records_.resize(cuda::kRecord * (static_cast<std::size_t>(points_) + 1));  // and the zero sink record
+    partials_.resize(6 * cuda::kReduceBlocks);
+    first_bad_.resize(1);
+    first_non_finite_.resize(1);
+    increment_.resize(1);
+    sums_.resize(1);
+    host_u_.resize(3 * static_cast<std::size_t>(nodes_));
+    host_u_previous_.resize(3 * static_cast<std::size_t>(nodes_));
+    log().info("cuda backend: {} ({}), rows in {} precision, {:.0f} MB on the device", device_name_, capability_,
+               precision_, static_cast<double>(rows_->bytes()) / 1e6);
+  }
+
+  json describe() const override {
+    const double steps = std::max<double>(1.0, static_cast<double>(steps_));
+    json out = {{"type", "cuda"},
+                {"device", device_name_},
+                {"compute_capability", capability_},
+                {"precision", precision_},
+                {"force_evaluations", evaluations_},
+                {"host_to_device_bytes_per_step", static_cast<double>(bytes_up_) / steps},
+                {"device_to_host_bytes_per_step", static_cast<double>(bytes_down_) / steps}};
+    if (evaluations_ > 0) {
+      const double seconds = kernel_ms_ / 1e3 / static_cast<double>(evaluations_);
+      out["force_kernel_s"] = seconds;
+      out["force_kernel_bytes"] = streamed_bytes();
+      out["force_kernel_GB_per_s"] = static_cast<double>(streamed_bytes()) / seconds / 1e9;
+    }
+    return out;
+  }
+
+  void set_mass(std::span<const double> mass) override {
+    check(cudaMemcpy(mass_.data(), mass.data(), mass.size_bytes(), cudaMemcpyHostToDevice), "copying the masses");
+  }
+
+  void set_state(std::span<const double> u, std::span<const double> u_previous) override {
+    to_device(u, u_.data());
+    to_device(u_previous, u_previous_.data());
+    stale();
+  }
+
+  std::span<const double> displacement() override {
+    if (!u_on_host_) from_device(u_.data(), host_u_.span());
+    u_on_host_ = true;
+    return host_u_.span();
+  }
+  std::span<const double> previous_displacement() override {
+    if (!previous_on_host_) from_device(u_previous_.data(), host_u_previous_.span());
+    previous_on_host_ = true;
+    return host_u_previous_.span();
+  }
+
+  Index evaluate_forces(IncrementSums* sums) override {
+    f_.swap(f_previous_);
+    const Index bad = timed_forces(u_.data(), f_.data());
+    if (bad >= 0 || sums == nullptr) return bad;
+    cuda::increment_sums(nodes_, u_.data(), u_previous_.data(), f_.data(), f_previous_.data(), mass_.data(),
+                         partials_.data(), increment_.data(), stream_);
+    cuda::IncrementSumsDevice host{};
+    download(increment_.data(), &host, sizeof(host));
+    sums->stiffness = host.stiffness;
+    sums->inertia = host.inertia;
+    return bad;
+  }
+
+  std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
+    if (!f_ext.empty()) to_device(f_ext, f_ext_.data());
+    check(cudaMemsetAsync(first_non_finite_.data(), 0xff, sizeof(unsigned long long), stream_), "cudaMemsetAsync");
+    cuda::predict(nodes_, u_.data(), u_previous_.data(), f_.data(), f_ext.empty() ? nullptr : f_ext_.data(),
+                  mass_.data(), alpha, beta, prediction_.data(), free_.data(), first_non_finite_.data(), stream_);
+    check(cudaGetLastError(), "launching the update");
+    unsigned long long first = 0;
+    download(first_non_finite_.data(), &first, sizeof(first));
+    return first == ULLONG_MAX ? -1 : static_cast<std::int64_t>(first);
+  }
+
+  void set_prediction(std::span<const double> u) override {
+    to_device(u, prediction_.data());
+    check(cudaMemcpyAsync(free_.data(), prediction_.data(), prediction_.bytes(), cudaMemcpyDeviceToDevice, stream_),
+          "copying the prediction");
+  }
+  void prediction(std::span<double> out) override { from_device(prediction_.data(), out); }
+
+  void constrained_values(const ConstraintBlock& block, std::vector<double>& out) override {
+    DeviceBlock& device = on_device(block);
+    cuda::constrained_values(device.view, prediction_.data(), device.values.data(), stream_);
+    check(cudaGetLastError(), "launching the constraint rows");
+    out.resize(device.values.size());
+    download(device.values.data(), out.data(), device.values.bytes());
+  }
+
+  void add_correction(const ConstraintBlock& block, const std::vector<double>& y) override {
+    DeviceBlock& device = on_device(block);
+    upload(y.data(), device.values.data(), y.size() * sizeof(double));
+    cuda::add_correction(device.view, device.values.data(), prediction_.data(), stream_);
+    check(cudaGetLastError(), "launching the constraint correction");
+  }
+
+  StepSums commit() override {
+    cuda::step_sums(nodes_, prediction_.data(), free_.data(), u_.data(), u_previous_.data(), mass_.data(),
+                    partials_.data(), sums_.data(), stream_);
+    check(cudaGetLastError(), "launching the step's sums");
+    cuda::StepSumsDevice host{};
+    download(sums_.data(), &host, sizeof(host));
+    u_previous_.swap(u_);
+    u_.swap(prediction_);
+    stale();
+    ++steps_;
+    return {host.largest_increment, host.largest_displacement, host.projection_energy, host.kinetic_product,
+            static_cast<Index>(host.fastest_node)};
+  }
+
+  Index internal_forces(std::span<const double> u, std::span<double> f) override {
+    to_device(u, scratch_u_.data());
+    const Index bad = timed_forces(scratch_u_.data(), scratch_f_.data());
+    from_device(scratch_f_.data(), f);
+    return bad;
+  }
+
+ private:
+  [[noreturn]] void refuse(const std::string& message) const { throw InputError(pointer_, message); }
+
+  void select_device() {
+    int count = 0;
+    const cudaError_t status = cudaGetDeviceCount(&count);
+    if (status != cudaSuccess || count == 0)
+      refuse(fmt::format("no usable CUDA device ({}): the cuda backend needs an NVIDIA GPU and its driver; run on the "
+                         "CPU instead: leave out /backend, or --backend cpu",
+                         status != cudaSuccess ? cudaGetErrorString(status) : "none found"));
+    if (device_ >= count)
+      refuse(fmt::format("/device = {} but this machine has {} CUDA device(s), numbered from 0", device_, count));
+    check(cudaSetDevice(device_), "cudaSetDevice");
+    cudaDeviceProp properties{};
+    check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
+    device_name_ = properties.name;
+    capability_ = fmt::format("{}.{}", properties.major, properties.minor);
+    check(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), "cudaStreamCreate");
+    check(cudaEventCreate(&start_), "cudaEventCreate");
+    check(cudaEventCreate(&stop_), "cudaEventCreate");
+  }
+
+  // One law per distinct material of the model, in the order met; materials[p] = point p's law.
+  std::vector<cuda::Law> read_laws(const Model& model, std::vector<std::uint16_t>& materials) const {
+    std::vector<const Material*> seen;
+    std::vector<cuda::Law> laws;
+    for (Index p = 0; p < points_; ++p) {
+      const Material* material = &model.ip_material(p);
+      auto it = std::find(seen.begin(), seen.end(), material);
+      if (it == seen.end()) {
+        laws.push_back(law_of(*material));
+        seen.push_back(material);
+        it = seen.end() - 1;
+      }
+      materials[static_cast<std::size_t>(p)] = static_cast<std::uint16_t>(it - seen.begin());
+    }
+    return laws;
+  }
+
+  cuda::Law law_of(const Material& material) const {
+    const json form = material.closed_form();
+    const std::string law = form.is_object() ? form.value("law", "") : "";
+    cuda::Law out;
+    if (law == "ogden") {
+      const double mu = form.at("mu").get<double>(), alpha = form.at("alpha").get<double>();
+      out.kind = cuda::kOgden;
+      out.half_alpha = 0.5 * alpha;
+      out.stress_factor = 2.0 * mu / alpha;
+    } else if (law == "neo_hookean") {
+      out.kind = cuda::kNeoHookean;
+      out.mu = form.at("mu").get<double>();
+    } else {
+      refuse(fmt::format("a material of this scene ({}) is not one the cuda backend evaluates on the device (ogden, "
+                         "neo_hookean): run on the CPU (leave out /backend, or --backend cpu)",
+                         form.is_null() ? "its law gives no closed form" : form.dump()));
+    }
+    out.two_over_D = 2.0 * (1.0 / form.at("D").get<double>());  // VolumetricPenalty::bulk_modulus(), bit for bit
+    return out;
+  }
+
+  // The forces of u4 into f4, timed by events around the kernels; returns the first inadmissible point or -1.
+  Index timed_forces(const double* u4, double* f4) {
+    check(cudaMemsetAsync(first_bad_.data(), 0x7f, sizeof(int), stream_), "cudaMemsetAsync");
+    check(cudaEventRecord(start_, stream_), "cudaEventRecord");
+    rows_->forces(u4, f4, records_.data(), first_bad_.data(), stream_);
+    check(cudaEventRecord(stop_, stream_), "cudaEventRecord");
+    int first = 0;
+    download(first_bad_.data(), &first, sizeof(first));
+    float ms = 0.0f;
+    check(cudaEventElapsedTime(&ms, start_, stop_), "cudaEventElapsedTime");
+    kernel_ms_ += ms;
+    ++evaluations_;
+    return first >= 0x7f7f7f7f ? -1 : first;
+  }
+
+  std::int64_t streamed_bytes() const {
+    const std::int64_t vectors = 4 * (static_cast<std::int64_t>(nodes_) + 1) * 8;
+    return rows_->bytes() + static_cast<std::int64_t>(points_) * (2 * cuda::kRecord * 8 + 8 + 2) + 2 * vectors;
+  }
+
+  DeviceBlock& on_device(const ConstraintBlock& block) {
+    if (block.revision != blocks_revision_) {  // rebuilt: every block is new
+      blocks_.clear();
+      blocks_revision_ = block.revision;
+    }
+    DeviceBlock& device = blocks_[&block];
+    if (device.revision == block.revision) return device;
+    device.revision = block.revision;
+    device.row_offsets.upload(block.row_offsets);
+    device.row_nodes.upload(block.row_nodes);
+    device.row_values.upload(block.row_values);
+    device.node_list.upload(block.nodes);
+    device.node_offsets.upload(block.node_offsets);
+    device.node_rows.upload(block.node_rows);
+    device.node_values.upload(block.node_values);
+    device.values.resize(static_cast<std::size_t>(block.rows) * block.components.size());
+    cuda::ConstraintView& v = device.view;
+    v.rows = block.rows;
+    v.nodes = static_cast<std::int64_t>(block.nodes.size());
+    v.k = static_cast<int>(block.components.size());
+    for (int j = 0; j < v.k; ++j) v.components[j] = block.components[static_cast<std::size_t>(j)];
+    v.row_offsets = device.row_offsets.data();
+    v.row_nodes = device.row_nodes.data();
+    v.row_values = device.row_values.data();
+    v.node_list = device.node_list.data();
+    v.node_offsets = device.node_offsets.data();
+    v.node_rows = device.node_rows.data();
+    v.node_values = device.node_values.data();
+    bytes_up_ += static_cast<long long>(block.row_values.size() * 20 + block.node_values.size() * 20);
+    return device;
+  }
+
+  // Host vectors hold 3 doubles per node, the device's 4: one strided copy each way.
+  void to_device(std::span<const double> host, double* device) {
+    check(cudaMemcpy2DAsync(device, 4 * sizeof(double), host.data(), 3 * sizeof(double), 3 * sizeof(double),
+                            static_cast<std::size_t>(nodes_), cudaMemcpyHostToDevice, stream_),
+          "copying a vector to the device");
+    check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+    bytes_up_ += static_cast<long long>(host.size_bytes());
+  }
+  void from_device(const double* device, std::span<double> host) {
+    check(cudaMemcpy2DAsync(host.data(), 3 * sizeof(double), device, 4 * sizeof(double), 3 * sizeof(double),
+                            static_cast<std::size_t>(nodes_), cudaMemcpyDeviceToHost, stream_),
+          "copying a vector from the device");
+    check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+    bytes_down_ += static_cast<long long>(host.size_bytes());
+  }
+  void upload(const void* host, void* device, std::size_t bytes) {
+    check(cudaMemcpyAsync(device, host, bytes, cudaMemcpyHostToDevice, stream_), "cudaMemcpyAsync to the device");
+    bytes_up_ += static_cast<long long>(bytes);
+  }
+  // Waits for everything queued before it: the one point where the host learns a result.
+  void download(const void* device, void* host, std::size_t bytes) {
+    check(cudaMemcpyAsync(host, device, bytes, cudaMemcpyDeviceToHost, stream_), "cudaMemcpyAsync from the device");
+    check(cudaStreamSynchronize(stream_), "cudaStreamSynchronize");
+    bytes_down_ += static_cast<long long>(bytes);
+  }
+  void stale() { u_on_host_ = previous_on_host_ = false; }
+
+  std::string pointer_;
+  int device_;
+  std::string device_name_, capability_, precision_;
+  cudaStream_t stream_ = nullptr;
+  cudaEvent_t start_ = nullptr, stop_ = nullptr;
+  Index nodes_ = 0, points_ = 0;
+  std::unique_ptr<DeviceRows> rows_;
+  DeviceBuffer<double> u_, u_previous_, prediction_, free_, f_, f_previous_, f_ext_, scratch_u_, scratch_f_;
+  DeviceBuffer<double> mass_, records_, partials_;
+  DeviceBuffer<int> first_bad_;
+  DeviceBuffer<unsigned long long> first_non_finite_;
+  DeviceBuffer<cuda::IncrementSumsDevice> increment_;
+  DeviceBuffer<cuda::StepSumsDevice> sums_;
+  PinnedBuffer<double> host_u_, host_u_previous_;
+  bool u_on_host_ = false, previous_on_host_ = false;
+  std::map<const ConstraintBlock*, DeviceBlock> blocks_;
+  long blocks_revision_ = -1;
+  long long bytes_up_ = 0, bytes_down_ = 0, steps_ = 0, evaluations_ = 0;
+  double kernel_ms_ = 0.0;
+};
+
+}  // namespace
+}  // namespace mtled
+
+MTLED_PLUGIN(mtled::StepEngine, mtled::CudaBackend)

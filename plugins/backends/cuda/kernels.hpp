@@ -1,0 +1,105 @@
+#pragma once
+// The CUDA backend's kernels (kernels.cu), called from the host engine (cuda_backend.cpp) with device pointers.
+// Device vectors of nodal values hold 4 doubles per node (x, y, z, 0) plus a zero sink node at the end; the stress
+// records hold kRecord doubles per integration point plus a zero sink record. Every reduction runs over a fixed
+// grid in a fixed order, so a result is the same on every run (no floating-point atomics).
+#include <cuda_runtime.h>
+
+#include <cstdint>
+
+#include "sliced_rows.hpp"
+
+namespace mtled::cuda {
+
+constexpr int kRecord = 10;  // w P row by row (P_00 .. P_22), then one zero: 80 bytes, 16-byte aligned
+
+// A constitutive law the device evaluates (Material::closed_form): the constants of its stress_batch().
+struct Law {
+  int kind = 0;               // kOgden or kNeoHookean
+  double half_alpha = 0.0;    // Ogden: alpha / 2
+  double stress_factor = 0.0; // Ogden: 2 mu / alpha
+  double mu = 0.0;            // neo-Hookean
+  double two_over_D = 0.0;    // both: (2/D), J U'(J) = (2/D) J (J - 1)
+};
+constexpr int kOgden = 0;
+constexpr int kNeoHookean = 1;
+
+// Device pointers of one pass's sliced rows (SlicedRows).
+template <class Real>
+struct SlicedView {
+  const std::int64_t* slice_begin = nullptr;
+  const std::int32_t* column = nullptr;
+  const Real* gx = nullptr;
+  const Real* gy = nullptr;
+  const Real* gz = nullptr;
+  const std::int32_t* row = nullptr;  // the node pass's lane -> node
+  std::int64_t rows = 0;
+};
+
+template <class Real>
+struct PointPass {
+  SlicedView<Real> rows;
+  const double* weight = nullptr;
+  const std::uint16_t* material = nullptr;
+  const Law* laws = nullptr;
+  const double* u4 = nullptr;  // the displacements evaluated
+  double* records = nullptr;
+  int* first_bad = nullptr;  // atomicMin of the inadmissible points' indices (INT_MAX: none)
+};
+
+template <class Real>
+struct NodePass {
+  SlicedView<Real> rows;
+  const double* records = nullptr;
+  double* f4 = nullptr;
+};
+
+// f = f_int(u): both passes.
+template <class Real>
+void internal_forces(const PointPass<Real>& points, const NodePass<Real>& nodes, cudaStream_t stream);
+
+// pred = u + beta (u - u_prev) + alpha M^-1 (f_ext - f) (f_ext null: none), free = pred; first_non_finite gets the
+// lowest unknown (3 node + component) of pred that is not finite.
+void predict(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4, const double* f_ext4,
+             const double* mass, double alpha, double beta, double* prediction4, double* free4,
+             unsigned long long* first_non_finite, cudaStream_t stream);
+
+// What the host reads back of the reductions (one copy per call).
+struct IncrementSumsDevice {
+  double stiffness, inertia;
+};
+struct StepSumsDevice {
+  double largest_increment, largest_displacement, projection_energy, kinetic_product, fastest_energy;
+  long long fastest_node;
+};
+constexpr int kReduceBlocks = 256;
+constexpr int kReduceThreads = 256;
+
+// du.(f - f_prev), du.M du with du = u - u_prev, into *out (device), partials: 2 kReduceBlocks doubles of scratch.
+void increment_sums(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4,
+                    const double* f_previous4, const double* mass, double* partials, IncrementSumsDevice* out,
+                    cudaStream_t stream);
+// The step's sums (StepSums) of pred (after the projection), free (before it), u and u_prev, into *out (device);
+// partials: 6 kReduceBlocks doubles of scratch.
+void step_sums(std::int32_t nodes, const double* prediction4, const double* free4, const double* u4,
+               const double* u_previous4, const double* mass, double* partials, StepSumsDevice* out,
+               cudaStream_t stream);
+
+// The constraint projection's two products for one block (ConstraintBlock, on the device): out = Phi v (rows x k,
+// the components interleaved) and v += M^-1 Phi^T y.
+struct ConstraintView {
+  std::int64_t rows = 0, nodes = 0;
+  int components[3] = {0, 0, 0};
+  int k = 0;
+  const std::int64_t* row_offsets = nullptr;
+  const std::int32_t* row_nodes = nullptr;
+  const double* row_values = nullptr;
+  const std::int32_t* node_list = nullptr;
+  const std::int64_t* node_offsets = nullptr;
+  const std::int32_t* node_rows = nullptr;
+  const double* node_values = nullptr;
+};
+void constrained_values(const ConstraintView& block, const double* v4, double* out, cudaStream_t stream);
+void add_correction(const ConstraintView& block, const double* y, double* v4, cudaStream_t stream);
+
+}  // namespace mtled::cuda
