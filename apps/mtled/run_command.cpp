@@ -245,6 +245,7 @@ class SceneRun {
     summary_["integration_points"] = model.integration_point_count();
     summary_["support_size"] = {{"min", stats.min}, {"mean", stats.mean}, {"max", stats.max}};
     summary_["min_reciprocal_condition"] = stats.min_reciprocal_condition;
+    summary_["backend"] = simulation_->backend();  // with what it counted over the run
     summary_["steps"] = simulation_->step();
     summary_["simulated_time_s"] = simulation_->time();
     summary_["stable_time_step_s"] = simulation_->unscaled_stable_time_step();

@@ -224,9 +224,17 @@ void ConstraintSystem::solve(const Block& block, std::vector<double>& y, std::ve
   const double* D_inverse = block.inverse_diagonal.data();
   if (k == 1) return solve_factored<1>(block.factor, D_inverse, y.data(), 1, 0, work.data());
   if (k == 2) return solve_factored<2>(block.factor, D_inverse, y.data(), 2, 0, work.data());
-  // Three components on two threads: two on one, the third on the other, each in its own part of `work`.
+  // Three components on two threads: two on one, the third on the other; on three or more, one each (each in its
+  // own part of `work`). The arithmetic of each component is the same either way.
   ThreadTeam& team = model_.team();
   if (team.size() < 2 || rows < kRowsWorthAThread) return solve_factored<3>(block.factor, D_inverse, y.data(), 3, 0, work.data());
+  if (team.size() >= 3) {
+    team.run([&](int thread) {
+      if (thread < 3) solve_factored<1>(block.factor, D_inverse, y.data(), 3, static_cast<std::size_t>(thread),
+                                        work.data() + static_cast<std::size_t>(thread) * rows);
+    });
+    return;
+  }
   team.run([&](int thread) {
     if (thread == 0) solve_factored<2>(block.factor, D_inverse, y.data(), 3, 0, work.data());
     if (thread == 1) solve_factored<1>(block.factor, D_inverse, y.data(), 3, 2, work.data() + 2 * rows);

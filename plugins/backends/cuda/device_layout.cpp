@@ -26,12 +26,14 @@ SlicedRows<Real> slice_rows(const std::vector<std::int32_t>& order, std::int32_t
   out.gx.assign(elements, Real(0));
   out.gy.assign(elements, Real(0));
   out.gz.assign(elements, Real(0));
+  std::int64_t entries = 0;
+#pragma omp parallel for schedule(static) reduction(+ : entries)
   for (std::int64_t i = 0; i < rows; ++i) {
     const std::int32_t r = order[static_cast<std::size_t>(i)];
     const std::int64_t s = i / kSlice, lane = i % kSlice;
     out.row[static_cast<std::size_t>(i)] = r;
     const std::int64_t n = length(r);
-    out.entries += n;
+    entries += n;
     for (std::int64_t k = 0; k < n; ++k) {
       const auto at = static_cast<std::size_t>(out.slice_begin[static_cast<std::size_t>(s)] + k * kSlice + lane);
       const auto [column, gradient] = entry(r, k);
@@ -41,6 +43,7 @@ SlicedRows<Real> slice_rows(const std::vector<std::int32_t>& order, std::int32_t
       out.gz[at] = static_cast<Real>(gradient[2]);
     }
   }
+  out.entries = entries;
   return out;
 }
 

@@ -361,6 +361,18 @@ __global__ void step_finish(const double* partials, StepSumsDevice* out) {
   if (threadIdx.x == 0) *out = {sums[0], sums[1], sums[2], sums[3], mine[4], static_cast<long long>(mine[5])};
 }
 
+// ---- layouts ----------------------------------------------------------------------------------------------------
+
+__global__ void pack_kernel(std::int32_t nodes, const double* v4, double* v3) {
+  const std::int64_t d = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (d < 3 * static_cast<std::int64_t>(nodes)) v3[d] = v4[4 * (d / 3) + d % 3];
+}
+
+__global__ void unpack_kernel(std::int32_t nodes, const double* v3, double* v4) {
+  const std::int64_t d = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+  if (d < 3 * static_cast<std::int64_t>(nodes)) v4[4 * (d / 3) + d % 3] = v3[d];
+}
+
 // ---- the constraint projection's products -------------------------------------------------------------------------
 
 __global__ void constrained_values_kernel(ConstraintView b, const double* v, double* out) {
@@ -418,6 +430,14 @@ void step_sums(std::int32_t nodes, const double* prediction4, const double* free
   step_partials<<<kReduceBlocks, kReduceThreads, 0, stream>>>(nodes, prediction4, free4, u4, u_previous4, mass,
                                                                partials);
   step_finish<<<1, kReduceThreads, 0, stream>>>(partials, out);
+}
+
+void pack(std::int32_t nodes, const double* v4, double* v3, cudaStream_t stream) {
+  if (nodes > 0) pack_kernel<<<blocks_for(3 * static_cast<std::int64_t>(nodes)), kThreads, 0, stream>>>(nodes, v4, v3);
+}
+
+void unpack(std::int32_t nodes, const double* v3, double* v4, cudaStream_t stream) {
+  if (nodes > 0) unpack_kernel<<<blocks_for(3 * static_cast<std::int64_t>(nodes)), kThreads, 0, stream>>>(nodes, v3, v4);
 }
 
 void constrained_values(const ConstraintView& block, const double* v4, double* out, cudaStream_t stream) {

@@ -85,6 +85,10 @@ void step_sums(std::int32_t nodes, const double* prediction4, const double* free
                const double* u_previous4, const double* mass, double* partials, StepSumsDevice* out,
                cudaStream_t stream);
 
+// Between the host's 3 doubles per node and the device's 4: v3 (contiguous, copied in one transfer) to or from v4.
+void pack(std::int32_t nodes, const double* v4, double* v3, cudaStream_t stream);
+void unpack(std::int32_t nodes, const double* v3, double* v4, cudaStream_t stream);
+
 // The constraint projection's two products for one block (ConstraintBlock, on the device): out = Phi v (rows x k,
 // the components interleaved) and v += M^-1 Phi^T y.
 struct ConstraintView {
