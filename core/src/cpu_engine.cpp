@@ -1,6 +1,7 @@
 #include "mtled/cpu_engine.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -24,7 +25,19 @@ class CpuEngine final : public StepEngine {
     for (auto* v : {&u_, &u_previous_, &prediction_, &free_, &f_, &f_previous_}) v->assign(dofs, 0.0);
     first_bad_.assign(static_cast<std::size_t>(model.team().size()), -1);
   }
-  json describe() const override { return {{"type", "cpu"}, {"threads", model_->team().size()}}; }
+  // With the force kernel's mean time per evaluation and the memory bandwidth it reached (the bytes it must move,
+  // Model::streamed_bytes_per_force_evaluation, over that time): how close the run came to the machine.
+  json describe() const override {
+    json out = {{"type", "cpu"}, {"threads", model_->team().size()}, {"force_evaluations", evaluations_}};
+    if (evaluations_ > 0) {
+      const double seconds = kernel_s_ / static_cast<double>(evaluations_);
+      const auto bytes = static_cast<double>(model_->streamed_bytes_per_force_evaluation());
+      out["force_kernel_s"] = seconds;
+      out["force_kernel_bytes"] = bytes;
+      out["force_kernel_GB_per_s"] = bytes / seconds / 1e9;
+    }
+    return out;
+  }
 
   void set_mass(std::span<const double> mass) override { mass_.assign(mass.begin(), mass.end()); }
   void set_state(std::span<const double> u, std::span<const double> u_previous) override {
@@ -36,7 +49,10 @@ class CpuEngine final : public StepEngine {
 
   Index evaluate_forces(IncrementSums* sums) override {
     f_previous_.swap(f_);
+    const auto start = std::chrono::steady_clock::now();
     const Index bad = model_->internal_forces(u_, f_);
+    kernel_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ++evaluations_;
     if (bad >= 0 || sums == nullptr) return bad;
     // In unknown order, on one thread: every ten steps, and the order of the sums is the answer's.
     *sums = {};
@@ -148,6 +164,8 @@ class CpuEngine final : public StepEngine {
   std::vector<double> u_, u_previous_, prediction_, free_, f_, f_previous_, mass_;
   std::vector<std::int64_t> first_bad_;
   std::vector<StepSums> partial_;
+  long evaluations_ = 0;  // of the step's forces (evaluate_forces), and their time
+  double kernel_s_ = 0.0;
 };
 
 }  // namespace

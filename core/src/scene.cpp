@@ -381,12 +381,13 @@ const ComponentDeclaration& monitors_declaration() {
              "after the last, and find those turned inside out: material folded between integration points, which no "
              "point's J shows; 0 turns the check off");
     d.string("inversion")
-        .defaults("warn")
+        .defaults("stop")
         .choices({"warn", "stop"})
-        .doc("what inverted background tets do: \"warn\" logs the first and records them in summary.json "
-             "(monitors.inversion); \"stop\" ends the run (status \"unstable\", what \"inverted_between_points\"). "
-             "The kinematic needle folds tets across its path near the entry (the tissue cannot be cut), so warn is "
-             "the default");
+        .doc("what background tets turned inside out away from the needle's path do: \"stop\" ends the run (status "
+             "\"unstable\", what \"inverted_between_points\"); \"warn\" logs the first and records them in summary.json "
+             "(monitors.inversion). Tets around the needle's path (a vertex within the needle's radius plus that node's "
+             "support radius of the swept shaft) fold because the kinematic needle cannot cut the tissue: they are "
+             "counted as cut (monitors.inversion.cut_tets), not folds");
     return d;
   }();
   return declaration;

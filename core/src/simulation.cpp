@@ -299,6 +299,7 @@ StepRecord Simulation::last_step() const {
   r.constraint_sets = &constraint_sets_;
   r.previous_values = &previous_values_;
   r.external_forces = !force_sets_.empty();
+  if (needle_) r.needle = needle_->status();
   r.stable_time_step = stable_time_step_;
   r.time_step_factor = time_step_factor_;
   r.stable_step_margin = stable_step_margin_;

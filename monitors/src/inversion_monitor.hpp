@@ -2,8 +2,11 @@
 // /monitors/inversion_every_steps: the background tets moved by the interpolated displacements at their
 // vertices, every that many steps and after the last one. A tet whose moved volume is not positive means the
 // material folded between integration points (a driver pushed single nodes through it), which no integration
-// point's J need show. /monitors/inversion says what then: "stop" ends the run (InstabilityError
-// "inverted_between_points"), "warn" logs it once and records it in summary.json.
+// point's J need show, unless it lies in the needle's zone (a vertex within the needle's radius plus its support
+// radius of the swept shaft): the kinematic needle cannot cut the tissue, so the tets around its path fold; those
+// are counted as cut ("cut_tets" in summary.json). /monitors/inversion says what a
+// fold elsewhere does: "stop" (the default) ends the run (InstabilityError "inverted_between_points"), "warn" logs
+// it once and records it in summary.json.
 #include <cmath>
 #include <vector>
 
@@ -29,6 +32,7 @@ class InversionMonitor final : public StepMonitor {
   long every_;
   bool stop_;
   long checks_ = 0, last_checked_ = -1, inverted_tets_ = 0, first_inverted_at_ = 0;
+  long cut_tets_ = 0;  // the most inverted tets the needle's shaft crossed at any check
   double smallest_ratio_ = INFINITY;  // the smallest moved volume over reference volume of any tet
   long smallest_at_ = 0;
   std::vector<double> interpolated_;

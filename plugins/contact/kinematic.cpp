@@ -190,6 +190,9 @@ class KinematicNeedle final : public NeedleModel {
     s.phase = punctured_ ? NeedlePhase::penetration : NeedlePhase::indentation;
     s.puncture_depth = punctured_ ? puncture_depth_ : -1.0;
     s.driven_nodes = static_cast<Index>(nodes_.constraints.size() + shaft_.constraints.size());
+    s.entry = path_.entry;
+    s.direction = path_.direction;
+    s.radius = path_.radius;
     return s;
   }
 

@@ -271,6 +271,9 @@ class RigidContactNeedle final : public NeedleModel {
     s.phase = punctured_ ? NeedlePhase::penetration : NeedlePhase::indentation;
     s.puncture_depth = punctured_ ? puncture_depth_ : -1.0;
     s.driven_nodes = static_cast<Index>(contacts_.size());
+    s.entry = path_.entry;
+    s.direction = path_.direction;
+    s.radius = path_.radius;
     return s;
   }
 

@@ -351,7 +351,7 @@ TEST(Cli, ReactionsAreWrittenAtEachRelaxedLoad) {
 
 // A boundary condition that pushes the three nodes at the top's centre 6 mm into the 10 mm cube: every
 // integration point's J stays positive (the run used to end "ok"), but the background tets around the nodes
-// turn inside out. With /monitors/inversion = "stop" the run ends unstable naming where; by default it warns
+// turn inside out. With /monitors/inversion = "stop" (the default) the run ends unstable naming where; "warn" warns
 // and records the folded tets in summary.json. The plain compression folds nothing.
 TEST(Cli, MaterialFoldedBetweenIntegrationPointsIsReported) {
   const auto pushed = [](const std::string& action) {
@@ -389,6 +389,38 @@ TEST(Cli, MaterialFoldedBetweenIntegrationPointsIsReported) {
   summary = test::read_json(plain.parent_path() / "out" / "summary.json");
   EXPECT_EQ(summary["monitors"]["inversion"]["inverted_tets"].get<long>(), 0);
   EXPECT_GT(summary["monitors"]["inversion"]["smallest_volume_ratio"].get<double>(), 0.5);
+}
+
+// The check knows the needle: an 8 mm insertion into a 10 mm gel cylinder folds tets around the needle's path (2 cut
+// tets measured) and runs to the end under the default "stop"; a sphere of nodes pushed 5 mm into it 4 mm beside the
+// axis, outside the needle's zone, stops the run as a fold.
+TEST(Cli, AFoldAwayFromTheNeedleStopsTheRunWhereTheNeedleCutsDoNot) {
+  const fs::path folder = test::scratch_dir("cli-fold-needle");
+  const json needle = {{"type", "kinematic"}, {"diameter", 0.0016}, {"entry", {0.0, 0.0, 0.01}},
+                       {"direction", {0, 0, -1}}, {"depth", 0.008}, {"driven", "nodes_near_axis"}};
+  json scene = test::gel_cylinder_scene(0.01, needle);
+  test::write_text(folder / "needle.json", scene.dump(2));
+  scene["boundaries"].push_back({{"type", "prescribed_displacement"},
+                                 {"name", "pushed"},
+                                 {"nodes", {{"sphere", {{"center", {0.004, 0.0, 0.01}}, {"radius", 0.0015}}}}},
+                                 {"displacement", {0, 0, -0.005}}});
+  test::write_text(folder / "pushed.json", scene.dump(2));
+
+  auto result = test::run_mtled({"run", (folder / "needle.json").string(), "-o", (folder / "needle").string()});
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  json summary = test::read_json(folder / "needle" / "summary.json");
+  EXPECT_EQ(summary["monitors"]["inversion"]["action"], "stop");
+  EXPECT_EQ(summary["monitors"]["inversion"]["inverted_tets"].get<long>(), 0) << summary["monitors"].dump();
+  EXPECT_GT(summary["monitors"]["inversion"]["cut_tets"].get<long>(), 0) << summary["monitors"].dump();
+
+  result = test::run_mtled({"run", (folder / "pushed.json").string(), "-o", (folder / "pushed").string()});
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  summary = test::read_json(folder / "pushed" / "summary.json");
+  EXPECT_EQ(summary["diagnostic"]["what"], "inverted_between_points") << summary["diagnostic"].dump();
+  EXPECT_GT(summary["monitors"]["inversion"]["inverted_tets"].get<long>(), 0);
+  // The folded node lies outside the needle's zone: farther from the axis than the needle and its supports reach.
+  const json& where = summary["diagnostic"]["where"][0]["coordinates_m"];
+  EXPECT_GT(std::hypot(where[0].get<double>(), where[1].get<double>()), 0.003) << where.dump();
 }
 
 TEST(Cli, OverridesAndUnknownCommands) {

@@ -4,10 +4,12 @@
 // stops the run by throwing InstabilityError, and reports its own record into summary.json
 // ("monitors": {name: record}). The step itself knows none of them.
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "mtled/interfaces/driver.hpp"
 #include "mtled/interfaces/integrator.hpp"
 #include "mtled/json.hpp"
 #include "mtled/types.hpp"
@@ -16,7 +18,6 @@ namespace mtled {
 
 class Model;
 class ConstraintSystem;
-class NodalConstraints;
 
 // What a monitor may change in the run it watches: the stable time step the integrator sizes its next steps by
 // (DiscreteSystem::stable_time_step). Only ever lowered: the stable-step monitor lowers it when the deformed body
@@ -44,6 +45,7 @@ struct StepRecord {
   const std::vector<NodalConstraints*>* constraint_sets = nullptr;
   const std::vector<std::vector<Vec3>>* previous_values = nullptr;  // the sets' prescribed values at n
   bool external_forces = false;                                      // some driver applies forces
+  std::optional<NeedleStatus> needle;                                // the scene's needle, where it is now
   double stable_time_step = 0.0;  // the stable step in use for the masses in use (before the integrator's factor)
   double time_step_factor = 1.0;  // the integrator's
   double stable_step_margin = 0.9;  // the integrator's: the largest fraction of the stable step it should take

@@ -95,6 +95,11 @@ struct NeedleStatus {
   NeedlePhase phase = NeedlePhase::indentation;
   double puncture_depth = -1.0;   // m, negative until the needle punctures
   Index driven_nodes = 0;
+  // The shaft in the reference configuration: from `entry` along `direction` (unit) to the tip at `depth`, `radius`
+  // across: what the needle has swept through (the inversion monitor tells the tets it cut from folds elsewhere).
+  Vec3 entry = Vec3::Zero();
+  Vec3 direction = -Vec3::UnitZ();
+  double radius = 0.0;  // m
 };
 
 class NeedleModel : public Driver {
