@@ -7,7 +7,8 @@
 # update, the bandwidth it reached and its fraction of the copy's, and the floating-point operations per update
 # (a count from the kernel's arithmetic: 18 per support entry for F, 24 for the forces, about 450 per point for the
 # Ogden stress and P).
-# Usage: benchmarks/speed_table.sh [BUILD_DIR] [OLD_BUILD_DIR]      (defaults: build, none)
+# Usage: benchmarks/speed_table.sh [BUILD_DIR] [OLD_BUILD_DIR]      (defaults: build, none; the older build runs the
+#        scenes of its own source tree, the folder above OLD_BUILD_DIR, as a user of that commit would)
 #        SIMD=avx2 runs the new build's kernels on AVX2 (a stand-in for an AVX2-only CPU on an AVX-512 one).
 set -uo pipefail
 cd "$(dirname "$0")/.."
@@ -17,7 +18,7 @@ work=$(mktemp -d)
 echo "CPU: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs), $(nproc) cores; instruction sets:" \
      "$(grep -o -m1 -w -e avx512f -e avx2 /proc/cpuinfo | sort -u | xargs)"
 copy() {  # $1 = threads: GB/s of a 256 MiB copy (read + write), median of 5
-  "$build/bin/mtled_benchmarks" --benchmark_filter="BM_MemoryCopyThreads/threads:$1\$" --benchmark_repetitions=5 \
+  "$build/bin/mtled_benchmarks" --benchmark_filter="BM_MemoryCopyThreads/threads:$1/" --benchmark_repetitions=5 \
     --benchmark_report_aggregates_only=true --benchmark_format=json 2>/dev/null |
     python3 -c "import json,sys; print(f\"{[b for b in json.load(sys.stdin)['benchmarks'] if b['aggregate_name'] == 'median'][0]['bytes_per_s'] / 1e9:.1f}\")"
 }
@@ -60,6 +61,6 @@ for label_scene in "default:share/scenes/needle_small_sample.json" "brain:share/
   [ "$label" = brain ] && extra=("${steps[@]}")
   run "$label" "$build/bin/mtled" "$scene" "${extra[@]}"
   run "$label-single" "$build/bin/mtled" "$scene" "${extra[@]}" "${single[@]}"
-  [ -n "$old" ] && run "$label-old" "$old/bin/mtled" "$scene" "${extra[@]}"
+  [ -n "$old" ] && run "$label-old" "$old/bin/mtled" "$(dirname "$old")/$scene" "${extra[@]}"
 done
 rm -rf "$work"

@@ -41,6 +41,17 @@ std::vector<double> random_field(Index nodes, double amplitude, unsigned seed) {
   return u;
 }
 
+// The sum of the nodal forces (3 per node) and the sum of their magnitudes.
+std::pair<Vec3, double> net_force(const std::vector<double>& f) {
+  Vec3 sum = Vec3::Zero();
+  double magnitude = 0.0;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    sum[static_cast<int>(i % 3)] += f[i];
+    magnitude += std::abs(f[i]);
+  }
+  return {sum, magnitude};
+}
+
 double max_abs(const std::vector<double>& v) {
   double m = 0.0;
   for (double x : v) m = std::max(m, std::abs(x));
@@ -201,28 +212,18 @@ TEST(Model, InternalForcesSumToZeroForAnyDeformation) {
         const auto u = random_field(model->node_count(), 3e-4, 13);
         std::vector<double> f(u.size());
         ASSERT_EQ(model->internal_forces(u, f), -1);
-        Vec3 sum = Vec3::Zero();
-        double magnitude = 0.0;
-        for (std::size_t i = 0; i < f.size(); ++i) {
-          sum[static_cast<int>(i % 3)] += f[i];
-          magnitude += std::abs(f[i]);
-        }
+        const auto [sum, magnitude] = net_force(f);
         EXPECT_LE(sum.norm(), 1e-12 * magnitude)
             << sf << " consistent " << consistent << " nodal_average " << nodal_average << ": sum " << sum.transpose();
       }
-  // Single-precision rows: each point's test gradients no longer sum to exactly zero, but to their rounding (2^-24
-  // of each), which mostly cancels over a support: the imbalance stays under one float rounding of the total
-  // (measured 6e-10 of it).
+  // Single-precision rows: each point's gradients, rounded to float, no longer sum to exactly zero but to their
+  // rounding (2^-24 of each), which mostly cancels over a support: the imbalance stays under one float rounding of
+  // the total.
   const auto single = make_model("mmls", 0.3, 5, "ogden", true, false, RowPrecision::single_precision);
   const auto u = random_field(single->node_count(), 3e-4, 13);
   std::vector<double> f(u.size());
   ASSERT_EQ(single->internal_forces(u, f), -1);
-  Vec3 sum = Vec3::Zero();
-  double magnitude = 0.0;
-  for (std::size_t i = 0; i < f.size(); ++i) {
-    sum[static_cast<int>(i % 3)] += f[i];
-    magnitude += std::abs(f[i]);
-  }
+  const auto [sum, magnitude] = net_force(f);
   EXPECT_LE(sum.norm(), 0x1p-24 * magnitude) << "single precision: sum " << sum.transpose();
 }
 
@@ -305,8 +306,8 @@ TEST(Model, VectorisedForcesEqualTheOnePointDefinitionOnEveryInstructionSet) {
 }
 
 // Single-precision rows round each stored gradient once, by at most 2^-24 of itself; the forces are linear in the
-// gradients (through t and through F), so they move by about that fraction of the forces' own size (measured 0.4 of
-// it on this cloud), far under what the discretisation resolves. 4 x 2^-24 leaves room for other clouds; any
+// gradients (through F and through the test gradients), so they move by about that fraction of the forces' own size
+// (measured 0.35 of it on this cloud), far under what the discretisation resolves. 4 x 2^-24 leaves room for other clouds; any
 // gradient stored wrongly would be orders above it. The difference must not be zero: the precision took effect.
 TEST(Model, SinglePrecisionRowsChangeTheForcesByTheirRoundingOnly) {
   for (const bool nodal_average : {false, true}) {
