@@ -1,4 +1,4 @@
-// mtled: the command line. See docs/cli.md; exit codes: 0 ok, 1 other failure, 2 invalid input,
+// mtled: the command line (its commands: README.md); exit codes: 0 ok, 1 other failure, 2 invalid input,
 // 3 numerical instability.
 #include <CLI/CLI.hpp>
 

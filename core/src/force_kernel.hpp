@@ -9,8 +9,8 @@
 // The per-node arrays u4, xi4 and f4 hold 4 doubles per node (x, y, z, 0) and a zero padding node at the end
 // (GradientRows); m3 holds 3 doubles per integration point (the mean of its support's xi). Every lane of a batch past
 // its count is filled with F = I. The rows are read in the precision they are stored in, and summed in double.
+#include "mtled/gradient_rows.hpp"
 #include "mtled/interfaces/material.hpp"
-#include "mtled/model.hpp"
 
 namespace mtled::force_kernel {
 

@@ -38,44 +38,6 @@ Mat3 deformation_gradient_at(const GradientRows& rows, Index ip, const double* u
 
 }  // namespace
 
-void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index padding_node, RowPrecision precision) {
-  precision_ = precision;
-  block_offsets_.assign(supports.size() + 1, 0);
-  sizes_.resize(supports.size());
-  entries_ = 0;
-  for (std::size_t r = 0; r < supports.size(); ++r) {
-    sizes_[r] = static_cast<int>(supports[r].size());
-    entries_ += sizes_[r];
-    block_offsets_[r + 1] = block_offsets_[r] + (sizes_[r] + kBlock - 1) / kBlock;
-  }
-  records_.assign(static_cast<std::size_t>(kBlock * blocks()), 4 * padding_node);
-  const auto values = static_cast<std::size_t>(3 * kBlock * blocks());
-  double_gradients_.assign(precision == RowPrecision::double_precision ? values : 0, 0.0);
-  single_gradients_.assign(precision == RowPrecision::single_precision ? values : 0, 0.0f);
-  for (std::size_t r = 0; r < supports.size(); ++r)
-    for (std::size_t k = 0; k < supports[r].size(); ++k)
-      records_[position(static_cast<Index>(r), static_cast<int>(k))] = 4 * supports[r][k];
-}
-
-void GradientRows::set_gradient(Index row, int k, const Vec3& gradient) {
-  const std::size_t at = position(row, k), block = at / kBlock, lane = at % kBlock;
-  for (int c = 0; c < 3; ++c) {
-    const std::size_t i = (3 * block + c) * kBlock + lane;
-    if (precision_ == RowPrecision::single_precision)
-      single_gradients_[i] = static_cast<float>(gradient[c]);
-    else
-      double_gradients_[i] = gradient[c];
-  }
-}
-
-Vec3 GradientRows::gradient(Index row, int k) const {
-  const std::size_t at = position(row, k), block = at / kBlock, lane = at % kBlock;
-  const std::size_t i = 3 * kBlock * block + lane;
-  if (precision_ == RowPrecision::single_precision)
-    return {single_gradients_[i], single_gradients_[i + kBlock], single_gradients_[i + 2 * kBlock]};
-  return {double_gradients_[i], double_gradients_[i + kBlock], double_gradients_[i + 2 * kBlock]};
-}
-
 Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
              std::vector<std::shared_ptr<const Material>> region_materials, Options options)
     : mesh_(std::move(mesh)), shape_functions_(std::move(shape_functions)), materials_(std::move(region_materials)) {

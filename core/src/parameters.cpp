@@ -1,5 +1,7 @@
 #include "mtled/parameters.hpp"
 
+#include "mtled/node_selector.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>

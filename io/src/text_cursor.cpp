@@ -56,13 +56,6 @@ void TextCursor::fail_at_end(std::string_view what) {
   fail(fmt::format("the file ends while reading {}: it is truncated or a count in it is wrong; export it again", what));
 }
 
-bool TextCursor::at_end() {
-  while (position_ < text_.size() && is_space(text_[position_])) {
-    if (text_[position_] == '\n') ++line_;
-    ++position_;
-  }
-  return position_ >= text_.size();
-}
 
 std::optional<std::string_view> TextCursor::next_bytes(std::size_t count) {
   if (count > text_.size() - position_) return std::nullopt;

@@ -2,6 +2,7 @@
 // A boundary condition that prescribes the interpolated displacement of a node set, for chosen components,
 // as load_fraction x (d + G X): `fixed` has d = 0 and G = 0; `prescribed_displacement` takes d and G.
 #include "mtled/interfaces/driver.hpp"
+#include "mtled/node_selector.hpp"
 
 namespace mtled {
 

@@ -114,21 +114,8 @@ class KinematicNeedle final : public NeedleModel {
     strain_radius_ = strain_radius_option_.value_or(std::max(2.0 * path_.radius, spacing));
     lateral_ramp_ = spacing;
 
-    // Footprint: surface nodes near the entry within the capture radius of the axis (at least the nearest).
-    const auto& surface = model.surface();
-    Index nearest = -1;
-    double nearest_distance = INFINITY;
-    for (Index i = 0; i < model.node_count(); ++i) {
-      if (!surface[i]) continue;
-      const Vec3& x = model.nodes()[i];
-      const double d = (x - path_.entry).norm();
-      if (d < nearest_distance) {
-        nearest_distance = d;
-        nearest = i;
-      }
-      if (std::abs(path_.axial(x)) <= 0.5 * spacing && path_.radial(x) <= capture_radius_) footprint_.push_back(i);
-    }
-    if (footprint_.empty()) footprint_.push_back(nearest);
+    // The footprint within the capture radius of the axis.
+    footprint_ = footprint_nodes(path_, model, spacing, capture_radius_);
 
     if (shaft_surface_) {
       place_shaft_points(model, spacing);

@@ -23,6 +23,25 @@ NeedlePath read_needle_path(const Parameters& p) {
   return path;
 }
 
+std::vector<Index> footprint_nodes(const NeedlePath& path, const Model& model, double spacing, double radius) {
+  const auto& surface = model.surface();
+  Index nearest = -1;
+  double nearest_distance = INFINITY;
+  std::vector<Index> footprint;
+  for (Index i = 0; i < model.node_count(); ++i) {
+    if (!surface[i]) continue;
+    const Vec3& x = model.nodes()[i];
+    const double distance = (x - path.entry).norm();
+    if (distance < nearest_distance) {
+      nearest_distance = distance;
+      nearest = i;
+    }
+    if (std::abs(path.axial(x)) <= 0.5 * spacing && path.radial(x) <= radius) footprint.push_back(i);
+  }
+  if (footprint.empty()) footprint.push_back(nearest);
+  return footprint;
+}
+
 double spacing_at_entry(const NeedlePath& path, const Model& model) {
   std::vector<Index> nearest;
   model.node_search().nearest(path.entry, 8, nearest);

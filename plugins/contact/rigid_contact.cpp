@@ -174,22 +174,7 @@ class RigidContactNeedle final : public NeedleModel {
       for (int k = 0; k < rows.size(ip); ++k) node_stiffness_[rows.node(ip, k)] += share;
     }
 
-    // Footprint: surface nodes at the entry within the footprint radius of the axis (at least the nearest).
-    const auto& surface = model.surface();
-    Index nearest = -1;
-    double nearest_distance = INFINITY;
-    std::vector<Index> footprint;
-    for (Index i = 0; i < model.node_count(); ++i) {
-      if (!surface[i]) continue;
-      const Vec3& x = model.nodes()[i];
-      const double distance = (x - path_.entry).norm();
-      if (distance < nearest_distance) {
-        nearest_distance = distance;
-        nearest = i;
-      }
-      if (std::abs(path_.axial(x)) <= 0.5 * spacing_ && path_.radial(x) <= footprint_radius_) footprint.push_back(i);
-    }
-    if (footprint.empty()) footprint.push_back(nearest);
+    const std::vector<Index> footprint = footprint_nodes(path_, model, spacing_, footprint_radius_);
 
     // Candidates: nodes that the needle's volume can reach (within a node spacing of the shaft, from just
     // before the entry to just past the final depth).

@@ -24,8 +24,7 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
         "mass-proportional damping coefficient c in M u'' + c M u' + f_int = f_ext");
     d.number("load_time").unit("s").positive().optional().doc(
         "time over which the loads grow from 0 to full; default: the whole duration");
-    d.string("load_curve").defaults("smooth").choices({"smooth", "linear"}).doc(
-        "shape of the load ramp: smooth (10x^3 - 15x^4 + 6x^5, no jerk at the ends) or linear");
+    declare_load_curve(d);
     d.example({{"duration", 0.01}});
   }
 
@@ -34,7 +33,7 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
         factor_(p.number("time_step_factor")),
         damping_(p.number("damping")),
         load_time_(p.optional_number("load_time").value_or(duration_)),
-        curve_(load_curve_from_string(p.string("load_curve"))) {}
+        curve_(load_curve_from(p)) {}
 
   void initialise(DiscreteSystem& system) override {
     stable_ = system.stable_time_step();

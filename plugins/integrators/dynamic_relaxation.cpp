@@ -34,8 +34,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     d.integer("load_steps").unit("1").at_least(1).defaults(2000).doc(
         "steps over which the loads grow from 0 to full; more steps follow a path-dependent load (the needle) "
         "more quasi-statically");
-    d.string("load_curve").defaults("smooth").choices({"smooth", "linear"}).doc(
-        "shape of the load ramp: smooth (10x^3 - 15x^4 + 6x^5) or linear");
+    declare_load_curve(d);
     d.number("tolerance").unit("1").positive().less_than(1.0).defaults(1e-6).doc(
         "stop when the estimated distance to the steady state (max over nodes) is below this fraction of the "
         "largest displacement");
@@ -60,7 +59,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   explicit DynamicRelaxationIntegrator(const Parameters& p)
       : factor_(p.number("time_step_factor")),
         load_steps_(p.integer("load_steps")),
-        curve_(load_curve_from_string(p.string("load_curve"))),
+        curve_(load_curve_from(p)),
         tolerance_(p.number("tolerance")),
         converged_steps_(p.integer("converged_steps")),
         max_steps_(p.integer("max_steps")),

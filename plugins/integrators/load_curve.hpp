@@ -5,12 +5,22 @@
 #include <algorithm>
 #include <string>
 
+#include "mtled/parameters.hpp"
+
 namespace mtled {
 
 enum class LoadCurve { linear, smooth };
 
-inline LoadCurve load_curve_from_string(const std::string& name) {
-  return name == "linear" ? LoadCurve::linear : LoadCurve::smooth;
+// Declares "load_curve", the one declaration every integrator that ramps its loads shares; read it back with
+// load_curve_from(parameters).
+inline void declare_load_curve(ComponentDeclaration& d) {
+  d.string("load_curve").defaults("smooth").choices({"smooth", "linear"}).doc(
+      "shape of the load ramp: smooth (10x^3 - 15x^4 + 6x^5: no velocity or acceleration jump at either end, so the "
+      "ramp excites no high modes) or linear (constant rate)");
+}
+
+inline LoadCurve load_curve_from(const Parameters& p) {
+  return p.string("load_curve") == "linear" ? LoadCurve::linear : LoadCurve::smooth;
 }
 
 inline double load_fraction(LoadCurve curve, double x) {

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "mtled/gradient_rows.hpp"
 #include "mtled/interfaces/material.hpp"
 #include "mtled/interfaces/shape_functions.hpp"
 #include "mtled/interfaces/volumetric_treatment.hpp"
@@ -43,61 +44,6 @@ SupportRows transpose_rows(Index rows, Index columns, EntriesOf&& entries_of) {
   for (Index r = 0; r < rows; ++r)
     entries_of(r, [&](Index c) { transpose.nodes[static_cast<std::size_t>(next[static_cast<std::size_t>(c)]++)] = r; });
   return transpose;
-}
-
-// The precision the force kernel's rows are stored in. Sums, stresses and the state are double either way; "single"
-// halves the bytes the kernel streams per support entry at a relative rounding of about 6e-8 in each gradient.
-enum class RowPrecision { double_precision, single_precision };
-
-// Shape-function gradients at the integration points, laid out for the force kernel's gather of F: row r holds
-// blocks block_begin(r) .. block_end(r) - 1 of kBlock entries each; a block holds its entries' record offsets (4 x
-// the node index: the kernel's per-node displacement array has 4 doubles per node), then the x, the y and the z
-// gradient components of its entries, each contiguous (structure of arrays), so one SIMD load reads one component
-// of several entries. A row's last block is padded with zero gradients on the padding node (the node count: one
-// past the last node), which the kernel's per-node array carries as a zero-displacement sink. Gradients are stored
-// in the precision asked for; gradient() returns the stored value, so setup code sees what the kernel uses.
-class GradientRows {
- public:
-  static constexpr int kBlock = 4;
-
-  // One row per support list; gradients zero until set.
-  void assign(const std::vector<std::vector<Index>>& supports, Index padding_node, RowPrecision precision);
-  void set_gradient(Index row, int k, const Vec3& gradient);
-
-  RowPrecision precision() const { return precision_; }
-  Index rows() const { return static_cast<Index>(sizes_.size()); }
-  int size(Index row) const { return sizes_[row]; }  // entries, padding excluded
-  std::int64_t entries() const { return entries_; }   // all rows, padding excluded
-  Index node(Index row, int k) const { return records_[position(row, k)] / 4; }
-  Vec3 gradient(Index row, int k) const;
-
-  std::int64_t block_begin(Index row) const { return block_offsets_[row]; }
-  std::int64_t block_end(Index row) const { return block_offsets_[row + 1]; }
-  const Index* block_records(std::int64_t block) const { return records_.data() + kBlock * block; }
-  // Real: the stored precision (float for single_precision).
-  template <class Real>
-  const Real* block_gradients(std::int64_t block) const;
-  std::int64_t blocks() const { return block_offsets_.empty() ? 0 : block_offsets_.back(); }
-
- private:
-  std::size_t position(Index row, int k) const { return static_cast<std::size_t>(kBlock * block_offsets_[row] + k); }
-
-  RowPrecision precision_ = RowPrecision::double_precision;
-  std::vector<std::int64_t> block_offsets_;
-  std::vector<int> sizes_;
-  std::int64_t entries_ = 0;
-  AlignedVector<Index> records_;
-  AlignedVector<double> double_gradients_;  // the one the precision names is filled
-  AlignedVector<float> single_gradients_;
-};
-
-template <>
-inline const double* GradientRows::block_gradients<double>(std::int64_t block) const {
-  return double_gradients_.data() + 3 * kBlock * block;
-}
-template <>
-inline const float* GradientRows::block_gradients<float>(std::int64_t block) const {
-  return single_gradients_.data() + 3 * kBlock * block;
 }
 
 struct SupportStatistics {

@@ -10,10 +10,11 @@
 #include <vector>
 
 #include "mtled/errors.hpp"
-#include "mtled/node_selector.hpp"
 #include "mtled/types.hpp"
 
 namespace mtled {
+
+struct NodeSelector;  // node_selector.hpp: what Parameters::node_set returns
 
 // What a component is for. Each category has its own interface in mtled/interfaces/ and its own place in
 // a scene. `scene` is the kernel's own sections (discretisation, output).

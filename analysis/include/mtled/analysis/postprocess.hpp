@@ -19,7 +19,7 @@ std::vector<CellField> cell_fields(const Model& model, std::span<const double> u
 
 // The final state's distance from equilibrium and from rest, and the time step against the stable one
 // (docs/studies.md): net_force_N, net_force_over_largest_reaction, strain_energy_J, kinetic_energy_J (the
-// kernel's, Simulation::kinetic_energy), kinetic_over_strain_energy, time_step_over_stable and, for a
+// energy monitor's, monitored_kinetic_energy), kinetic_over_strain_energy, time_step_over_stable and, for a
 // steady-state integrator, steady_state_relative_error_bound.
 json error_indicators(Simulation& simulation);
 

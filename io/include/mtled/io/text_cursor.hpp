@@ -25,8 +25,6 @@ class TextCursor {
   std::string_view expect_token(std::string_view what);
   // Fails with "the file ends while reading WHAT" (for callers that describe WHAT only when needed).
   [[noreturn]] void fail_at_end(std::string_view what);
-  // Whether only whitespace is left.
-  bool at_end();
   // The next `count` bytes as they are (binary data inside a text file), or nothing when fewer are left.
   std::optional<std::string_view> next_bytes(std::size_t count);
 

@@ -32,6 +32,10 @@ void check_needle_enters_body(const NeedlePath& path, const Model& model, const 
 // Mean edge length of the surface nodes nearest the entry: the local node spacing where the needle enters.
 double spacing_at_entry(const NeedlePath& path, const Model& model);
 
+// The footprint, the surface nodes the tip meets first: those within half the entry's node `spacing` of the entry's
+// plane and within `radius` of the axis, or the surface node nearest the entry when none is.
+std::vector<Index> footprint_nodes(const NeedlePath& path, const Model& model, double spacing, double radius);
+
 // The puncture test both needle models share: the largest principal Green strain (in absolute value) at the
 // integration points within `radius` of the tip.
 class TipStrainWatch {
