@@ -1,3 +1,13 @@
+# mtled_left_out_plugin(CATEGORY category NAME name REASON text): a component this build leaves out, the reason a
+# sentence that says so ("not built: ...") (an optional
+# dependency missing or switched off). The names and reasons go to left-out.txt beside the plugins, which the kernel
+# reads when a scene names such a component, so the message says why it is missing instead of "unknown". A reason
+# holds no semicolon (CMake would split it).
+function(mtled_left_out_plugin)
+  cmake_parse_arguments(ARG "" "CATEGORY;NAME;REASON" "" ${ARGN})
+  set_property(GLOBAL APPEND PROPERTY MTLED_LEFT_OUT_PLUGINS "${ARG_CATEGORY} ${ARG_NAME}: ${ARG_REASON}")
+endfunction()
+
 # mtled_add_plugin(CATEGORY category NAME name SOURCES src... [LINK_LIBRARIES libs...]
 #                  [OUTPUT_DIRECTORY dir] [NO_INSTALL])
 #

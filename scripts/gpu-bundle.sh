@@ -15,7 +15,13 @@ rm -rf "$bundle"
 cmake --install "$build" --prefix "$bundle" >/dev/null
 # Gmsh's generators and its reader need libgmsh and OpenCASCADE (hundreds of MB): left out; meshes come as files.
 for plugin in "$bundle"/lib/mtled/plugins/*.so; do
-  if ldd "$plugin" | grep -q libgmsh; then rm "$plugin"; fi
+  if ldd "$plugin" | grep -q libgmsh; then
+    rm "$plugin"
+    component=$(basename "$plugin" .so)
+    component=${component#mtled-}
+    echo "${component%%-*} ${component#*-}: left out of the GPU bundle: it needs Gmsh. Write the scene's mesh with mtled mesh where Gmsh is, and read it here" \
+      >> "$bundle/lib/mtled/plugins/left-out.txt"
+  fi
 done
 rm -rf "$bundle/include" "$bundle/lib/cmake"
 # The GPU tests, run from the bundle (tests/support reads MTLED_TEST_* from the environment).

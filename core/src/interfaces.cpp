@@ -36,16 +36,8 @@ IncrementSums DiscreteSystem::evaluate_forces(bool increment_sums) {
   f_int_.resize(u.size());
   f_int_previous_.resize(u.size());
   internal_forces(u, f_int_);
-  IncrementSums sums;
-  if (!increment_sums) return sums;
-  const auto u_previous = previous_displacement();
-  const auto m = mass();
-  for (std::size_t i = 0; i < u.size(); ++i) {
-    const double du = u[i] - u_previous[i];
-    sums.stiffness += du * (f_int_[i] - f_int_previous_[i]);
-    sums.inertia += du * du * m[i / 3];
-  }
-  return sums;
+  if (!increment_sums) return {};
+  return mtled::increment_sums(u, previous_displacement(), f_int_, f_int_previous_, mass());
 }
 
 StepSums DiscreteSystem::advance(double alpha, double beta, double time, double load_fraction) {

@@ -125,6 +125,16 @@ std::vector<std::string> PluginCatalog::names(Category category) const {
   return list;
 }
 
+std::optional<std::string> PluginCatalog::left_out_reason(Category category, std::string_view name) const {
+  const std::string key = fmt::format("{} {}: ", to_string(category), name);
+  for (const auto& folder : search_path_) {
+    std::ifstream file(folder / "left-out.txt");
+    for (std::string line; std::getline(file, line);)
+      if (line.rfind(key, 0) == 0) return line.substr(key.size());
+  }
+  return std::nullopt;
+}
+
 const PluginCatalog::Available* PluginCatalog::find(Category category, std::string_view name) const {
   for (const auto& a : available_)
     if (a.category == category && a.name == name) return &a;
@@ -147,10 +157,7 @@ const ComponentDeclaration& PluginCatalog::load(Category category, std::string_v
     if (!hint.empty()) message += "; " + hint;
     message += known.empty() ? fmt::format(" (no {} plugins found)", to_string(category))
                              : fmt::format(" (available: {})", fmt::join(known, ", "));
-    // The one plugin whose absence is a build option, not a typo.
-    if (category == Category::backend && name == "cuda")
-      message += "; the cuda backend is built when CMake finds the CUDA toolkit (nvcc): rebuild with it, or run on "
-                 "the CPU (leave out /backend, or --backend cpu)";
+    if (const auto reason = left_out_reason(category, name)) message += "; " + *reason;
     std::vector<std::string> folders;
     for (const auto& f : search_path_) folders.push_back(f.string());
     message += fmt::format("; plugin folders searched: {}", folders.empty() ? "none" : fmt::format("{}", fmt::join(folders, ":")));

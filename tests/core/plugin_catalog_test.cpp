@@ -79,6 +79,19 @@ TEST(PluginCatalog, UnknownComponentSuggestsTheClosestAndListsFolders) {
   EXPECT_NE(message.find((kBad / "good").string()), std::string::npos) << message;
 }
 
+// A component the build left out (left-out.txt, written by CMake's mtled_left_out_plugin) is named with the reason,
+// not only as unknown.
+TEST(PluginCatalog, AComponentTheBuildLeftOutSaysWhy) {
+  const fs::path folder = test::scratch_dir("catalog-left-out");
+  std::ofstream(folder / "left-out.txt") << "material other_law: not built: it needs -DWITH_OTHER=ON\n"
+                                         << "material absent_law: not built: it needs libabsent. Use ogden\n";
+  PluginCatalog catalog({folder});
+  const std::string message = load_error(catalog, "absent_law");
+  EXPECT_NE(message.find("unknown material \"absent_law\""), std::string::npos) << message;
+  EXPECT_NE(message.find("; not built: it needs libabsent. Use ogden"), std::string::npos) << message;
+  EXPECT_EQ(load_error(catalog, "never_built").find("not built"), std::string::npos);
+}
+
 TEST(PluginCatalog, ObjectsKeepTheirLibraryLoaded) {
   std::shared_ptr<Material> material;
   {

@@ -63,6 +63,9 @@ class PluginCatalog {
   const Registry& registry() const { return registry_; }
 
  private:
+  // Why the build left the component out ("not built: ..."), from left-out.txt in the search path's folders
+  // (mtled_left_out_plugin, scripts/gpu-bundle.sh).
+  std::optional<std::string> left_out_reason(Category category, std::string_view name) const;
   struct Library;
   std::shared_ptr<void> library_for(Category category, std::string_view name) const;
 
