@@ -11,6 +11,7 @@
 #include "mtled/analysis/study.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/plugin_catalog.hpp"
+#include "mtled/analysis/scene_sections.hpp"
 #include "mtled/scene.hpp"
 #include "study_support.hpp"
 
@@ -325,7 +326,7 @@ void check_scenes(Study& study, const std::vector<fs::path>& plugin_paths) {
         c.settings[pointer] = document.root.contains(p) ? document.root.at(p) : json("default");
       }
       PluginCatalog catalog(plugin_search_path(plugin_paths, scene_plugin_paths(document)));
-      validate_scene(std::move(document), catalog);
+      validate_scene(std::move(document), catalog, run_scene_sections());
     } catch (const InputError& e) {
       for (const auto& p : e.problems())
         problems.push_back({fmt::format("{}: {} \"{}\": {}", study.file.string(), c.where, c.label, p.where), p.message});

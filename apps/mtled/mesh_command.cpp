@@ -4,6 +4,7 @@
 #include "mtled/io/mesh_writer.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin_catalog.hpp"
+#include "mtled/analysis/scene_sections.hpp"
 #include "mtled/scene.hpp"
 #include "mtled/simulation.hpp"
 
@@ -12,7 +13,7 @@ namespace mtled::app {
 int mesh_command(const MeshOptions& options) {
   SceneDocument document = read_scene(options.scene.scene, options.scene.overrides);
   PluginCatalog catalog(plugin_search_path(options.scene.plugin_paths, scene_plugin_paths(document)));
-  const Scene scene = validate_scene(std::move(document), catalog);
+  const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
   const TetMesh mesh = load_scene_mesh(scene, catalog);
   write_abaqus_mesh(mesh, options.output);
   log().info("{}: {} nodes, {} tets, {} regions, {} node sets; read it with {{\"type\": \"abaqus_file\", \"path\": \"{}\"}}",

@@ -6,6 +6,7 @@
 
 #include "commands.hpp"
 #include "mtled/log.hpp"
+#include "mtled/analysis/scene_sections.hpp"
 #include "mtled/scene.hpp"
 
 namespace mtled::app {
@@ -140,8 +141,7 @@ int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as
                  "(a test checks that it is current).\n\n";
     std::cout << "## Scene sections of the kernel\n\n";
     describe_markdown(std::cout, discretisation_declaration(), "###");
-    describe_markdown(std::cout, output_declaration(), "###");
-    describe_markdown(std::cout, monitors_declaration(), "###");
+    for (const auto& section : run_scene_sections()) describe_markdown(std::cout, *section.declaration, "###");
     for (Category category : plugin_categories()) {
       std::cout << "## " << to_string(category) << "\n\n";
       for (const auto& item : listed)
@@ -163,14 +163,14 @@ int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as
 
 int print_schema(const std::vector<std::filesystem::path>& plugin_paths) {
   PluginCatalog catalog(plugin_search_path(plugin_paths, {}));
-  std::cout << scene_json_schema(catalog).dump(2) << "\n";
+  std::cout << scene_json_schema(catalog, run_scene_sections()).dump(2) << "\n";
   return 0;
 }
 
 int validate_scene_command(const SceneOptions& options) {
   SceneDocument document = read_scene(options.scene, options.overrides);
   PluginCatalog catalog(plugin_search_path(options.plugin_paths, scene_plugin_paths(document)));
-  const Scene scene = validate_scene(std::move(document), catalog);
+  const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
   std::cout << fmt::format("{}: valid; plugins it uses: {}\n", options.scene.string(),
                            fmt::join(catalog.loaded_files(), ", "));
   return 0;

@@ -1,6 +1,9 @@
 #pragma once
+#include <atomic>
 #include <chrono>
 #include <string>
+
+#include "mtled/io/run_outputs.hpp"
 
 namespace mtled::app {
 
@@ -19,6 +22,25 @@ class Progress {
   bool enabled_;
   bool drawn_ = false;
   std::chrono::steady_clock::time_point start_, last_;
+};
+
+struct Interrupted : std::runtime_error {
+  Interrupted() : std::runtime_error("interrupted (Ctrl-C)") {}
+};
+
+// The run's terminal: the progress display after every step, and the end of the run (Interrupted) once `interrupted`
+// is set (by Ctrl-C).
+class ProgressWriter final : public OutputWriter {
+ public:
+  ProgressWriter(bool enabled, const std::atomic<bool>& interrupted) : progress_(enabled), interrupted_(interrupted) {}
+  std::string name() const override { return "progress"; }
+  void before_run(const StepRecord& initial) override { after_step(initial); }
+  void after_step(const StepRecord& step) override;
+
+ private:
+  void complete(const StepRecord&) override { progress_.finish(); }
+  Progress progress_;
+  const std::atomic<bool>& interrupted_;
 };
 
 }  // namespace mtled::app

@@ -72,6 +72,7 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   for (auto& buffer : thread_forces_) buffer.assign(padded, 0.0);
   thread_first_bad_.assign(thread_forces_.size(), std::numeric_limits<Index>::max());
   volumetric_ = std::move(options.volumetric);
+  view_ = std::make_unique<ModelView>(*this);
   if (volumetric_) volumetric_->setup(*this);
 }
 

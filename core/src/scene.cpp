@@ -316,83 +316,6 @@ const ComponentDeclaration& discretisation_declaration() {
   return declaration;
 }
 
-const ComponentDeclaration& output_declaration() {
-  static const ComponentDeclaration declaration = [] {
-    ComponentDeclaration d("output", Category::scene);
-    d.summary("What a run writes besides summary.json and result.vtu.");
-    d.integer("every_steps")
-        .defaults(0)
-        .non_negative()
-        .unit("1")
-        .doc("write steps/NNNNNN.vtu and series.pvd every this many steps; 0 writes the final state only");
-    d.integer("history_every_steps")
-        .defaults(20)
-        .at_least(1)
-        .unit("1")
-        .doc("add a row to needle.csv and reactions.csv every this many steps (and at the last step)");
-    d.string_list("cell_data")
-        .defaults(json::array())
-        .choices({"green_strain", "cauchy_stress", "von_mises_stress", "jacobian"})
-        .doc("per-cell fields in result.vtu, evaluated at each tet's integration points (averaged)");
-    d.string("vtu_format")
-        .defaults("binary")
-        .choices({"binary", "ascii"})
-        .doc("how result.vtu and steps/*.vtu store their arrays: \"binary\" (zlib-compressed, appended in base64, as "
-             "VTK writes them) or \"ascii\" (text, about three times larger); both exact");
-    return d;
-  }();
-  return declaration;
-}
-
-const ComponentDeclaration& monitors_declaration() {
-  static const ComponentDeclaration declaration = [] {
-    ComponentDeclaration d("monitors", Category::scene);
-    d.summary(
-        "Stability checks beyond the ones that are always on (non-finite values, J <= 0, energy growth): the "
-        "time step against the stable step of the current, deformed body, adapted or stopped, and material "
-        "folded between integration points (docs/stability.md).");
-    d.integer("stable_step_every_steps")
-        .defaults(2000)
-        .non_negative()
-        .unit("1")
-        .doc("re-estimate the stable time step 2 / sqrt(lambda_max(M^-1 K)) of the current, deformed body at step 1 and "
-             "then every this many steps, by Lanczos iteration on finite differences of the internal forces (see "
-             "stable_step for what follows); 0 turns the re-estimate off");
-    d.string("stable_step")
-        .defaults("adapt")
-        .choices({"adapt", "stop"})
-        .doc("what a re-estimate below the time step in use does: \"adapt\" lowers the integrator's step to its "
-             "margin of the estimate (0.9 for dynamic_relaxation, 0.5 for central_difference) when the step exceeds "
-             "that (the margin covers the estimate's few percent, stiffening until the next re-estimate and, for "
-             "central differences, the unsymmetric stiffness; the step is never raised again); \"stop\" ends the "
-             "run (status "
-             "\"unstable\", what \"time_step_above_stable\") when the step exceeds the estimate by more than 5%");
-    d.integer("stable_step_iterations")
-        .defaults(20)
-        .between(2, 200)
-        .unit("1")
-        .doc("Lanczos vectors per re-estimate (each one internal-force evaluation and one vector of memory); each "
-             "estimate starts from the previous one's Ritz vector; the first, from a random one, uses three times as many");
-    d.integer("inversion_every_steps")
-        .defaults(100)
-        .non_negative()
-        .unit("1")
-        .doc("move the background tets by the interpolated displacements at their vertices every this many steps and "
-             "after the last, and find those turned inside out: material folded between integration points, which no "
-             "point's J shows; 0 turns the check off");
-    d.string("inversion")
-        .defaults("stop")
-        .choices({"warn", "stop"})
-        .doc("what background tets turned inside out away from the needle's path do: \"stop\" ends the run (status "
-             "\"unstable\", what \"inverted_between_points\"); \"warn\" logs the first and records them in summary.json "
-             "(monitors.inversion). Tets around the needle's path (a vertex within the needle's radius plus that node's "
-             "support radius of the swept shaft) fold because the kinematic needle cannot cut the tissue: they are "
-             "counted as cut (monitors.inversion.cut_tets), not folds");
-    return d;
-  }();
-  return declaration;
-}
-
 namespace {
 
 struct Validator {
@@ -445,11 +368,16 @@ struct Validator {
   }
 };
 
-const std::vector<std::string>& top_level_keys() {
+const std::vector<std::string>& kernel_keys() {
   static const std::vector<std::string> keys = {"$schema",   "description", "plugin_paths",   "mesh",
                                                 "shape_function", "materials", "boundaries", "needle",
-                                                "integrator", "volumetric", "backend", "discretisation",
-                                                "output", "monitors"};
+                                                "integrator", "volumetric", "backend", "discretisation"};
+  return keys;
+}
+
+std::vector<std::string> top_level_keys(const std::vector<SceneSection>& sections) {
+  std::vector<std::string> keys = kernel_keys();
+  for (const auto& section : sections) keys.push_back(section.key);
   return keys;
 }
 
@@ -459,17 +387,24 @@ bool is_scene_pointer(const std::string& where, const SceneDocument& document) {
   if (where.empty() || where[0] != '/') return false;
   const std::string first = where.substr(1, where.find('/', 1) == std::string::npos ? std::string::npos
                                                                                     : where.find('/', 1) - 1);
-  const auto& keys = top_level_keys();
+  const auto& keys = kernel_keys();
   return document.root.contains(first) || std::find(keys.begin(), keys.end(), first) != keys.end();
 }
 
 }  // namespace
 
-Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
+const Parameters& Scene::section(const std::string& key) const {
+  const auto it = sections.find(key);
+  if (it == sections.end())
+    throw std::logic_error(fmt::format("the scene was validated without its \"{}\" section", key));
+  return it->second;
+}
+
+Scene validate_scene(SceneDocument document, PluginCatalog& catalog, const std::vector<SceneSection>& sections) {
   Validator v{catalog, {}};
   const json& root = document.root;
+  const std::vector<std::string> keys = top_level_keys(sections);
   for (const auto& [key, value] : root.items()) {
-    const auto& keys = top_level_keys();
     if (std::find(keys.begin(), keys.end(), key) != keys.end()) continue;
     const auto hint = did_you_mean(key, keys);
     v.problems.push_back({"/" + pointer_escape(key),
@@ -521,9 +456,9 @@ Scene validate_scene(SceneDocument document, PluginCatalog& catalog) {
   const json empty = json::object();
   scene.discretisation =
       validate_parameters(discretisation_declaration(), discretisation, "/discretisation", v.problems, {});
-  scene.output = validate_parameters(output_declaration(), root.value("output", empty), "/output", v.problems, {});
-  scene.monitors =
-      validate_parameters(monitors_declaration(), root.value("monitors", empty), "/monitors", v.problems, {});
+  for (const auto& section : sections)
+    scene.sections[section.key] = validate_parameters(*section.declaration, root.value(section.key, empty),
+                                                      "/" + section.key, v.problems, {});
 
   // At most one material may omit "region" (it fills every region the others leave).
   int without_region = 0;
@@ -548,7 +483,7 @@ InputError locate_problems(const InputError& error, const SceneDocument& documen
   return InputError(std::move(problems));
 }
 
-json scene_json_schema(PluginCatalog& catalog) {
+json scene_json_schema(PluginCatalog& catalog, const std::vector<SceneSection>& sections) {
   auto one_of = [&](Category category) {
     json options = json::array();
     for (const auto& name : catalog.names(category)) {
@@ -577,10 +512,11 @@ json scene_json_schema(PluginCatalog& catalog) {
       {"integrator", one_of(Category::integrator)},
       {"volumetric", optional(one_of(Category::volumetric))},
       {"backend", optional(one_of(Category::backend))},
-      {"discretisation", discretisation_declaration().to_json_schema()},
-      {"output", output_declaration().to_json_schema()},
-      {"monitors", monitors_declaration().to_json_schema()}};
-  for (const char* section : {"discretisation", "output", "monitors"}) {
+      {"discretisation", discretisation_declaration().to_json_schema()}};
+  for (const auto& section : sections) properties[section.key] = section.declaration->to_json_schema();
+  std::vector<std::string> declared = {"discretisation"};  // sections, not components: no "type"
+  for (const auto& section : sections) declared.push_back(section.key);
+  for (const auto& section : declared) {
     properties[section]["properties"].erase("type");
     properties[section]["required"] = json::array();
   }

@@ -12,7 +12,6 @@
 
 namespace mtled {
 
-StepObserver::~StepObserver() = default;
 
 namespace {
 
@@ -138,17 +137,20 @@ void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh
 void Simulation::build_drivers(const Scene& scene, PluginCatalog& catalog) {
   for (const auto& block : scene.boundaries) {
     auto boundary = build<BoundaryCondition>(catalog, block);
-    guarded(block.parameters, "setting up the boundary condition", [&] { boundary->setup(*model_); });
+    guarded(block.parameters, "setting up the boundary condition", [&] { boundary->setup(model_->view()); });
     boundaries_.push_back(boundary);
     drivers_.push_back(boundary.get());
   }
   if (scene.needle) {
     needle_ = build<NeedleModel>(catalog, *scene.needle);
-    guarded(scene.needle->parameters, "setting up the needle", [&] { needle_->setup(*model_); });
+    guarded(scene.needle->parameters, "setting up the needle", [&] { needle_->setup(model_->view()); });
     drivers_.push_back(needle_.get());
   }
   for (Driver* driver : drivers_) {
-    for (NodalConstraints* set : driver->constraints()) constraint_sets_.push_back(set);
+    for (NodalConstraints* set : driver->constraints()) {
+      constraint_sets_.push_back(set);
+      constraint_sets_read_only_.push_back(set);
+    }
     for (NodalForces* set : driver->forces()) force_sets_.push_back(set);
   }
   for (std::size_t a = 0; a < constraint_sets_.size(); ++a)
@@ -215,7 +217,7 @@ void Simulation::external_forces(std::span<double> f) {
 }
 
 void Simulation::update_drivers() {
-  for (Driver* driver : drivers_) driver->update(load_, *model_, displacement());
+  for (Driver* driver : drivers_) driver->update(load_, model_->view(), displacement());
   constraint_system_->update(constraint_sets_, mass_, mass_changed_);
   mass_changed_ = false;
 }
@@ -225,7 +227,7 @@ void Simulation::not_finite(std::int64_t unknown, double value, double new_time)
   throw node_instability(load_.step + 1, new_time, "non_finite",
                          fmt::format("displacement component {} of node {} at {} m became {}", "xyz"[unknown % 3], node,
                                      point_text(model_->nodes()[node]), value),
-                         *model_, node);
+                         model_->view(), node);
 }
 
 namespace {
@@ -288,16 +290,19 @@ StepRecord Simulation::last_step() const {
   r.time = load_.time;
   r.step_size = step_size_;
   r.previous_step_size = previous_step_size_;
+  r.load_fraction = load_.load_fraction;
+  r.steady_states = steady_states_;
   r.u = displacement();
   r.mass = mass_;
   r.sums = sums_;
-  r.model = model_.get();
+  r.model = &model_->view();
+  r.integrator = integrator_.get();
   r.internal_forces = [engine = engine_.get()](std::span<const double> u, std::span<double> f) {
     return engine->internal_forces(u, f);
   };
-  r.constraints = constraint_system_.get();
-  r.constraint_sets = &constraint_sets_;
-  r.previous_values = &previous_values_;
+  r.project_out = [constraints = constraint_system_.get()](std::span<double> v) { constraints->project_out(v); };
+  r.constraint_sets = constraint_sets_read_only_;
+  r.previous_values = previous_values_;
   r.external_forces = !force_sets_.empty();
   if (needle_) r.needle = needle_->status();
   r.stable_time_step = stable_time_step_;
@@ -306,31 +311,26 @@ StepRecord Simulation::last_step() const {
   return r;
 }
 
-void Simulation::add_monitor(std::unique_ptr<StepMonitor> monitor) { monitors_.push_back(std::move(monitor)); }
-
-const StepMonitor* Simulation::monitor(std::string_view name) const {
-  for (const auto& m : monitors_)
-    if (m->name() == name) return m.get();
-  return nullptr;
-}
+void Simulation::add_monitor(std::shared_ptr<StepMonitor> monitor) { monitors_.push_back(std::move(monitor)); }
 
 json Simulation::monitor_reports() const {
   json reports = json::object();
-  for (const auto& monitor : monitors_) reports[monitor->name()] = monitor->report();
+  for (const auto& monitor : monitors_)
+    if (json report = monitor->report(); !report.is_null()) reports[monitor->name()] = std::move(report);
   return reports;
 }
 
-void Simulation::run(StepObserver* observer) {
+void Simulation::run() {
   integrator_->initialise(*this);
   time_step_factor_ = integrator_->report().time_step_factor;
   stable_step_margin_ = integrator_->report().stable_step_margin;
-  if (observer != nullptr) observer->on_step(*this);
+  const StepRecord initial = last_step();
+  for (const auto& monitor : monitors_) monitor->before_run(initial);
   while (!integrator_->finished(*this)) {
     integrator_->step(*this);
     StepRecord step = last_step();
     step.control = this;
     for (const auto& monitor : monitors_) monitor->after_step(step);
-    if (observer != nullptr) observer->on_step(*this);
   }
   if (load_.step > 0) {
     const StepRecord last = last_step();

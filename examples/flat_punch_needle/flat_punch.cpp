@@ -9,7 +9,7 @@
 
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
-#include "mtled/model.hpp"
+#include "mtled/model_view.hpp"
 #include "mtled/needle/needle_geometry.hpp"
 #include "mtled/plugin.hpp"
 
@@ -30,7 +30,7 @@ class FlatPunchNeedle final : public NeedleModel {
     bonded_.name = "needle";
   }
 
-  void setup(const Model& model) override {
+  void setup(const ModelView& model) override {
     check_needle_enters_body(path_, model, parameters_);  // an entry off the body is refused, at its pointer
     // The end's footprint: surface nodes within half a node spacing of the entry plane and the radius of
     // the axis.
@@ -50,7 +50,7 @@ class FlatPunchNeedle final : public NeedleModel {
     bonded_.assign_nodes(std::move(footprint), Vec3::Zero());  // all three components: a bonded end
   }
 
-  void update(const LoadState& load, const Model&, std::span<const double>) override {
+  void update(const LoadState& load, const ModelView&, std::span<const double>) override {
     depth_ = load.load_fraction * path_.depth;
     for (auto& value : bonded_.values) value = depth_ * path_.direction;
   }

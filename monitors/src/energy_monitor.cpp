@@ -16,8 +16,8 @@ constexpr double kMargin = 10.0;
 }  // namespace
 
 void EnergyMonitor::after_step(const StepRecord& step) {
-  const auto& sets = *step.constraint_sets;
-  const auto& previous_values = *step.previous_values;
+  const auto& sets = step.constraint_sets;
+  const auto& previous_values = step.previous_values;
   for (std::size_t s = 0; s < sets.size(); ++s) {
     const NodalConstraints& set = *sets[s];
     const std::size_t n = std::min({previous_values[s].size(), set.values.size(), set.reactions.size()});
@@ -34,13 +34,11 @@ void EnergyMonitor::after_step(const StepRecord& step) {
   // time-step factors.) For a mode that grows, it grows too (in magnitude). The step engine sums both where the
   // state lives.
   if (!(step.step_size > 0.0)) return;
-  const double scale = step.previous_step_size > 0.0 ? 0.5 / (step.step_size * step.previous_step_size) : 0.0;
-  const Model& model = *step.model;
+  const ModelView& model = *step.model;
   const double added = step.sums.projection_energy;
-  const double kinetic = scale * step.sums.kinetic_product;
   const Index fastest = step.sums.fastest_node;
   work_bound_ += 0.5 * added / (step.step_size * step.step_size);
-  kinetic_energy_ = std::abs(kinetic);
+  kinetic_energy_ = step.kinetic_energy();
   // External force drivers would need their own work; none of the shipped plugins has one.
   if (step.external_forces || !(step.previous_step_size > 0.0)) return;
   if (work_bound_ > 0.0) largest_ratio_ = std::max(largest_ratio_, kinetic_energy_ / work_bound_);

@@ -11,14 +11,11 @@ class EnergyMonitor final : public StepMonitor {
   std::string name() const override { return "energy"; }
   void after_step(const StepRecord& step) override;
   json report() const override;
-  // At the last step (J): 1/2 v(n-1/2) . M v(n+1/2), the form central differences conserve (0 before the second
-  // step).
-  double kinetic_energy() const { return kinetic_energy_; }
 
  private:
   double work_bound_ = 0.0;  // J: sum of |reaction . increment of the prescribed value| and of the kinetic
                              // energy the constraint projection added
-  double kinetic_energy_ = 0.0;
+  double kinetic_energy_ = 0.0;  // at the last step (StepRecord::kinetic_energy)
   double largest_ratio_ = 0.0;  // of the kinetic energy to the work bound, over the run
 };
 

@@ -5,10 +5,34 @@
 #include <algorithm>
 
 #include "mtled/log.hpp"
-#include "mtled/model.hpp"
+#include "mtled/model_view.hpp"
 #include "mtled/instability.hpp"
 
 namespace mtled {
+
+void InversionMonitor::declare(ComponentDeclaration& d) {
+  d.integer("inversion_every_steps")
+      .defaults(100)
+      .non_negative()
+      .unit("1")
+      .doc("move the background tets by the interpolated displacements at their vertices every this many steps and "
+           "after the last, and find those turned inside out: material folded between integration points, which no "
+           "point's J shows; 0 turns the check off");
+  d.string("inversion")
+      .defaults("stop")
+      .choices({"warn", "stop"})
+      .doc("what background tets turned inside out away from the needle's path do: \"stop\" ends the run (status "
+           "\"unstable\", what \"inverted_between_points\"); \"warn\" logs the first and records them in summary.json "
+           "(monitors.inversion). Tets around the needle's path (a vertex within the needle's radius plus that node's "
+           "support radius of the swept shaft) fold because the kinematic needle cannot cut the tissue: they are "
+           "counted as cut (monitors.inversion.cut_tets), not folds");
+}
+
+std::unique_ptr<InversionMonitor> InversionMonitor::from_section(const Parameters& monitors) {
+  const long every = monitors.integer("inversion_every_steps");
+  if (every == 0) return nullptr;
+  return std::make_unique<InversionMonitor>(every, monitors.string("inversion") == "stop");
+}
 
 namespace {
 
@@ -17,7 +41,7 @@ namespace {
 // cannot cut the tissue; the nodes whose supports reach the shaft are dragged along with it, so the tets around the
 // path fold (on the brain phantom's 3 mm cloud, tets up to 3 mm from the 0.8 mm needle's axis). Those are cuts; a fold
 // outside the zone is the material folding.
-bool in_needle_zone(const Model& model, Index t, const NeedleStatus& needle) {
+bool in_needle_zone(const ModelView& model, Index t, const NeedleStatus& needle) {
   const TetMesh& mesh = model.mesh();
   for (const Index v : mesh.tets[t]) {
     const Vec3& x = mesh.points[v];
@@ -30,7 +54,7 @@ bool in_needle_zone(const Model& model, Index t, const NeedleStatus& needle) {
 }  // namespace
 
 void InversionMonitor::check(const StepRecord& step) {
-  const Model& model = *step.model;
+  const ModelView& model = *step.model;
   interpolated_.resize(step.u.size());
   model.interpolate(step.u, interpolated_);
   const auto& mesh = model.mesh();

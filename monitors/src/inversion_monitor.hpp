@@ -8,14 +8,20 @@
 // fold elsewhere does: "stop" (the default) ends the run (InstabilityError "inverted_between_points"), "warn" logs
 // it once and records it in summary.json.
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "mtled/monitor.hpp"
+#include "mtled/parameters.hpp"
 
 namespace mtled {
 
 class InversionMonitor final : public StepMonitor {
  public:
+  // Its parameters in the scene's "monitors" section.
+  static void declare(ComponentDeclaration& d);
+  // The monitor the section asks for; null when inversion_every_steps is 0.
+  static std::unique_ptr<InversionMonitor> from_section(const Parameters& monitors);
   InversionMonitor(long every, bool stop) : every_(every), stop_(stop) {}
   std::string name() const override { return "inversion"; }
   void after_step(const StepRecord& step) override {

@@ -1,28 +1,31 @@
 #include "mtled/monitors/scene_monitors.hpp"
 
-#include <limits>
-
 #include "energy_monitor.hpp"
 #include "inversion_monitor.hpp"
 #include "stable_step_monitor.hpp"
 
 namespace mtled {
 
-void add_scene_monitors(Simulation& simulation, const Scene& scene) {
-  simulation.add_monitor(std::make_unique<EnergyMonitor>());
-  if (const long every = scene.monitors.integer("stable_step_every_steps"); every > 0) {
-    // 1e-7 of the body's size: far inside the linear range of any element, far above round-off in the forces.
-    simulation.add_monitor(std::make_unique<StableStepMonitor>(
-        every, static_cast<int>(scene.monitors.integer("stable_step_iterations")),
-        1e-7 * simulation.model().length_scale(), scene.monitors.string("stable_step") == "adapt"));
-  }
-  if (const long every = scene.monitors.integer("inversion_every_steps"); every > 0)
-    simulation.add_monitor(std::make_unique<InversionMonitor>(every, scene.monitors.string("inversion") == "stop"));
+SceneSection monitors_section() {
+  static const ComponentDeclaration declaration = [] {
+    ComponentDeclaration d("monitors", Category::scene);
+    d.summary(
+        "Stability checks beyond the ones that are always on (non-finite values, J <= 0, energy growth): the "
+        "time step against the stable step of the current, deformed body, adapted or stopped, and material "
+        "folded between integration points (docs/stability.md).");
+    StableStepMonitor::declare(d);
+    InversionMonitor::declare(d);
+    return d;
+  }();
+  return {"monitors", &declaration};
 }
 
-double monitored_kinetic_energy(const Simulation& simulation) {
-  const auto* energy = dynamic_cast<const EnergyMonitor*>(simulation.monitor("energy"));
-  return energy != nullptr ? energy->kinetic_energy() : std::numeric_limits<double>::quiet_NaN();
+void add_scene_monitors(Simulation& simulation, const Scene& scene) {
+  const Parameters& monitors = scene.section("monitors");
+  simulation.add_monitor(std::make_unique<EnergyMonitor>());
+  if (auto monitor = StableStepMonitor::from_section(monitors, simulation.model().view()))
+    simulation.add_monitor(std::move(monitor));
+  if (auto monitor = InversionMonitor::from_section(monitors)) simulation.add_monitor(std::move(monitor));
 }
 
 }  // namespace mtled

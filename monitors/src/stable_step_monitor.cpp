@@ -3,13 +3,45 @@
 #include <Eigen/Eigenvalues>
 
 #include "mtled/instability.hpp"
-#include "mtled/constraints.hpp"
 #include "mtled/log.hpp"
+#include "mtled/model_view.hpp"
 
 namespace mtled {
 
+void StableStepMonitor::declare(ComponentDeclaration& d) {
+  d.integer("stable_step_every_steps")
+      .defaults(2000)
+      .non_negative()
+      .unit("1")
+      .doc("re-estimate the stable time step 2 / sqrt(lambda_max(M^-1 K)) of the current, deformed body at step 1 and "
+           "then every this many steps, by Lanczos iteration on finite differences of the internal forces (see "
+           "stable_step for what follows); 0 turns the re-estimate off");
+  d.string("stable_step")
+      .defaults("adapt")
+      .choices({"adapt", "stop"})
+      .doc("what a re-estimate below the time step in use does: \"adapt\" lowers the integrator's step to its "
+           "margin of the estimate (0.9 for dynamic_relaxation, 0.5 for central_difference) when the step exceeds "
+           "that (the margin covers the estimate's few percent, stiffening until the next re-estimate and, for "
+           "central differences, the unsymmetric stiffness; the step is never raised again); \"stop\" ends the "
+           "run (status "
+           "\"unstable\", what \"time_step_above_stable\") when the step exceeds the estimate by more than 5%");
+  d.integer("stable_step_iterations")
+      .defaults(20)
+      .between(2, 200)
+      .unit("1")
+      .doc("Lanczos vectors per re-estimate (each one internal-force evaluation and one vector of memory); each "
+           "estimate starts from the previous one's Ritz vector; the first, from a random one, uses three times as many");
+}
+
+std::unique_ptr<StableStepMonitor> StableStepMonitor::from_section(const Parameters& monitors, const ModelView& model) {
+  const long every = monitors.integer("stable_step_every_steps");
+  if (every == 0) return nullptr;
+  // 1e-7 of the body's size: far inside the linear range of any element, far above round-off in the forces.
+  return std::make_unique<StableStepMonitor>(every, static_cast<int>(monitors.integer("stable_step_iterations")),
+                                             1e-7 * model.length_scale(), monitors.string("stable_step") == "adapt");
+}
+
 double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
-  const ConstraintSystem& constraints = *step.constraints;
   const auto mass = step.mass;
   // The largest eigenvalue of K v = lambda M v at the current state by Lanczos iteration on
   // A = M^-1/2 K M^-1/2 (full reorthogonalisation; a few dozen vectors), with A q from a forward difference of
@@ -21,7 +53,7 @@ double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
   // dynamic relaxation's, whose limit is the same as its damping vanishes, is unstable); "adapt" keeps the step
   // at the integrator's margin below the estimate. The iteration runs in the
   // constrained subspace (every vector projected as the constraint correction projects each step's update,
-  // ConstraintSystem::project_out): a mode that the constraints hold still, such as the tissue between the
+  // StepRecord::project_out): a mode that the constraints hold still, such as the tissue between the
   // driven points around a needle, cannot grow. The next check starts from this one's Ritz vector; the first,
   // from a random vector, uses three times as many.
   const std::size_t dofs = step.u.size();
@@ -45,7 +77,7 @@ double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
   Eigen::VectorXd alpha(size), beta(size);
   Eigen::VectorXd w(static_cast<Eigen::Index>(dofs));
   std::vector<double> increment(mode_);  // a displacement increment, projected into the constrained subspace
-  constraints.project_out(increment);
+  step.project_out(increment);
   for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
   if (!(w.norm() > 0.0)) return 0.0;
   q.col(0) = w / w.norm();
@@ -61,7 +93,7 @@ double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
     if (step.internal_forces(perturbed, f1) >= 0) return 0.0;
     // M^-1 K x, projected, then back to the symmetric form: w = M^1/2 P M^-1 K x.
     for (std::size_t d = 0; d < dofs; ++d) increment[d] = (f1[d] - f0[d]) / (epsilon * mass[d / 3]);
-    constraints.project_out(increment);
+    step.project_out(increment);
     for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
     alpha[j] = q.col(j).dot(w);
     built = j + 1;
@@ -114,7 +146,7 @@ void StableStepMonitor::check(const StepRecord& step) {
 }
 
 void StableStepMonitor::refuse(const StepRecord& step) const {
-  const Model& model = *step.model;
+  const ModelView& model = *step.model;
   const double step_size = step.step_size;
   // Where the fastest mode lives: the node with the largest share of it.
   Index where = 0;

@@ -6,14 +6,20 @@
 // (InstabilityError "time_step_above_stable") when the time step exceeds the estimate by more than 5%
 // (docs/stability.md).
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "mtled/monitor.hpp"
+#include "mtled/parameters.hpp"
 
 namespace mtled {
 
 class StableStepMonitor final : public StepMonitor {
  public:
+  // Its parameters in the scene's "monitors" section.
+  static void declare(ComponentDeclaration& d);
+  // The monitor the section asks for; null when stable_step_every_steps is 0.
+  static std::unique_ptr<StableStepMonitor> from_section(const Parameters& monitors, const ModelView& model);
   // `perturbation_length`: the largest nodal perturbation of the force differences (m).
   StableStepMonitor(long every, int iterations, double perturbation_length, bool adapt)
       : every_(every), iterations_(iterations), perturbation_length_(perturbation_length), adapt_(adapt) {}

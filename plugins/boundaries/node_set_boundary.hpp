@@ -12,8 +12,8 @@ class NodeSetBoundary : public BoundaryCondition {
   static void declare_selection(ComponentDeclaration& d);
   NodeSetBoundary(const Parameters& parameters, Vec3 final_displacement, Mat3 final_gradient = Mat3::Zero());
 
-  void setup(const Model& model) override;
-  void update(const LoadState& load, const Model& model, std::span<const double> u) override;
+  void setup(const ModelView& model) override;
+  void update(const LoadState& load, const ModelView& model, std::span<const double> u) override;
   std::vector<NodalConstraints*> constraints() override { return {&set_}; }
 
  private:

@@ -107,7 +107,7 @@ class KinematicNeedle final : public NeedleModel {
     }
   }
 
-  void setup(const Model& model) override {
+  void setup(const ModelView& model) override {
     check_needle_enters_body(path_, model, parameters_);
     const double spacing = spacing_at_entry(path_, model);
     capture_radius_ = capture_radius_option_.value_or(std::max(path_.radius, 0.6 * spacing));
@@ -147,7 +147,7 @@ class KinematicNeedle final : public NeedleModel {
                  footprint_.size(), candidates_.size(), 1e3 * capture_radius_, coefficient_);
   }
 
-  void update(const LoadState& load, const Model& model, std::span<const double> u) override {
+  void update(const LoadState& load, const ModelView& model, std::span<const double> u) override {
     const double advance = load.load_fraction * path_.depth;
     if (punctured_) {
       capture_passed(model, u, advance);
@@ -217,7 +217,7 @@ class KinematicNeedle final : public NeedleModel {
   // Rings of points on the shaft's surface, one per `spacing` along the path from the entry to the final depth,
   // each with about one point per spacing around (at least 3), alternate rings turned by half a step. Points
   // outside every support (off the body) are left out.
-  void place_shaft_points(const Model& model, double spacing) {
+  void place_shaft_points(const ModelView& model, double spacing) {
     const Vec3 e1 = path_.direction.unitOrthogonal();
     const Vec3 e2 = path_.direction.cross(e1);
     const int around = std::max(3, static_cast<int>(std::lround(2.0 * std::numbers::pi * path_.radius / spacing)));
@@ -252,7 +252,7 @@ class KinematicNeedle final : public NeedleModel {
   // Captures what the tip has passed. At the first call (puncture) the footprint restarts: from then on it
   // moves with C_D like every captured entry; with shaft_surface the ring at the entry replaces it (the
   // footprint, a few nodes on one side of the axis, would pull the surface off-centre for the whole insertion).
-  void capture_passed(const Model& model, std::span<const double> u, double advance) {
+  void capture_passed(const ModelView& model, std::span<const double> u, double advance) {
     if (!restarted_footprint_) {
       for (std::size_t k = 0; k < nodes_.constraints.size(); ++k) {
         nodes_.captured_at[k] = nodes_.constraints.values[k];

@@ -23,7 +23,7 @@ NeedlePath read_needle_path(const Parameters& p) {
   return path;
 }
 
-std::vector<Index> footprint_nodes(const NeedlePath& path, const Model& model, double spacing, double radius) {
+std::vector<Index> footprint_nodes(const NeedlePath& path, const ModelView& model, double spacing, double radius) {
   const auto& surface = model.surface();
   Index nearest = -1;
   double nearest_distance = INFINITY;
@@ -42,7 +42,7 @@ std::vector<Index> footprint_nodes(const NeedlePath& path, const Model& model, d
   return footprint;
 }
 
-double spacing_at_entry(const NeedlePath& path, const Model& model) {
+double spacing_at_entry(const NeedlePath& path, const ModelView& model) {
   std::vector<Index> nearest;
   model.node_search().nearest(path.entry, 8, nearest);
   double sum = 0.0;
@@ -50,7 +50,7 @@ double spacing_at_entry(const NeedlePath& path, const Model& model) {
   return nearest.empty() ? 0.0 : sum / static_cast<double>(nearest.size());
 }
 
-void check_needle_enters_body(const NeedlePath& path, const Model& model, const Parameters& p) {
+void check_needle_enters_body(const NeedlePath& path, const ModelView& model, const Parameters& p) {
   const auto& surface = model.surface();
   std::vector<Index> nearest;
   model.node_search().nearest(path.entry, 64, nearest);
@@ -88,14 +88,14 @@ void check_needle_enters_body(const NeedlePath& path, const Model& model, const 
                                  path.direction[0], path.direction[1], path.direction[2], 1e3 * path.depth));
 }
 
-void TipStrainWatch::setup(const NeedlePath& path, const Model& model, double radius) {
+void TipStrainWatch::setup(const NeedlePath& path, const ModelView& model, double radius) {
   radius_ = radius;
   watched_.clear();
   for (Index ip = 0; ip < model.integration_point_count(); ++ip)
     if ((model.ip_positions()[ip] - path.entry).norm() <= radius + path.depth) watched_.push_back(ip);
 }
 
-double TipStrainWatch::largest(const Model& model, std::span<const double> u, const Vec3& tip) const {
+double TipStrainWatch::largest(const ModelView& model, std::span<const double> u, const Vec3& tip) const {
   double largest = 0.0;
   for (Index ip : watched_) {
     if ((model.ip_positions()[ip] - tip).norm() > radius_) continue;

@@ -147,7 +147,7 @@ class RigidContactNeedle final : public NeedleModel {
     e2_ = path_.direction.cross(e1_);
   }
 
-  void setup(const Model& model) override {
+  void setup(const ModelView& model) override {
     check_needle_enters_body(path_, model, parameters_);
     spacing_ = spacing_at_entry(path_, model);
     footprint_radius_ = footprint_radius_option_.value_or(std::max(path_.radius, 0.6 * spacing_));
@@ -160,19 +160,10 @@ class RigidContactNeedle final : public NeedleModel {
           "({:.3g} mm): the shaft never enters the tissue, only the tip acts",
           1e3 * cone, std::atan(tan_tip_) * 180.0 / std::numbers::pi, 1e3 * path_.depth);
 
-    // Explicit-dynamics stiffness of each node, m_I / dt_I^2 with the lumped mass and the critical step of the
-    // integration points it supports: sum over its points of rho w / (n dt^2). It does not depend on mass
-    // scaling (a scaled point's rho w / dt^2 is unchanged) and is what the constraint correction charges per
-    // unit of prescribed motion in one step.
-    node_stiffness_.assign(static_cast<std::size_t>(model.node_count()), 0.0);
+    // Explicit-dynamics stiffness of each node, m_I / dt_I^2 (ModelView::explicit_node_stiffness): what the
+    // constraint correction charges per unit of prescribed motion in one step.
+    node_stiffness_ = model.explicit_node_stiffness();
     node_mass_ = model.lumped_mass();
-    const auto& rows = model.ip_supports();
-    const auto& dt = model.ip_critical_time_steps();
-    for (Index ip = 0; ip < model.integration_point_count(); ++ip) {
-      const double share = model.ip_material(ip).density() * model.ip_weights()[ip] /
-                           (static_cast<double>(rows.size(ip)) * dt[ip] * dt[ip]);
-      for (int k = 0; k < rows.size(ip); ++k) node_stiffness_[rows.node(ip, k)] += share;
-    }
 
     const std::vector<Index> footprint = footprint_nodes(path_, model, spacing_, footprint_radius_);
 
@@ -199,7 +190,7 @@ class RigidContactNeedle final : public NeedleModel {
         1e3 * cone, mu_);
   }
 
-  void update(const LoadState& load, const Model& model, std::span<const double> u) override {
+  void update(const LoadState& load, const ModelView& model, std::span<const double> u) override {
     const double advance = load.load_fraction * path_.depth;
     const double step_advance = advance - depth_;
     // The integrators' step (time / steps); the gains depend on it where masses are not scaled.
@@ -384,7 +375,7 @@ class RigidContactNeedle final : public NeedleModel {
     contact_.keep_entries(keep);
   }
 
-  bool punctures(const Model& model, std::span<const double> u) {
+  bool punctures(const ModelView& model, std::span<const double> u) {
     if (puncture_force_) {
       // The reactions oscillate from step to step (the explicit pseudo-dynamics; the first step starts the
       // footprint from rest): compare an exponential average over about ten steps.
@@ -396,7 +387,7 @@ class RigidContactNeedle final : public NeedleModel {
 
   // Catches the candidate nodes the tip has passed that lie inside the needle's volume, or (after puncture)
   // within the capture radius of the axis unless they were released from the contact before.
-  void catch_nodes_inside(const Model& model, std::span<const double> u) {
+  void catch_nodes_inside(const ModelView& model, std::span<const double> u) {
     for (Index n : candidates_) {
       if (in_contact_[n]) continue;
       const Vec3 x = model.nodes()[n] + model.interpolate_node(n, u);
@@ -413,7 +404,7 @@ class RigidContactNeedle final : public NeedleModel {
   // diagonal of the constraint correction, sum_I N_I(X_K)^2 / k_I, with k_I the larger of the node's
   // explicit-dynamics stiffness (mass-scaling invariant) and m_I / h^2 for the step h in use (which is larger
   // where no mass scaling lifts the small steps: central differences).
-  double compliance(const Model& model, Index node) const {
+  double compliance(const ModelView& model, Index node) const {
     double sum = 0.0;
     const auto& rows = model.node_interpolation();
     for (std::int64_t k = rows.offsets[node]; k < rows.offsets[node + 1]; ++k) {
@@ -424,7 +415,7 @@ class RigidContactNeedle final : public NeedleModel {
     return sum;
   }
 
-  void catch_node(const Model& model, Index node, const Vec3& x, double xi, bool pinned) {
+  void catch_node(const ModelView& model, Index node, const Vec3& x, double xi, bool pinned) {
     Contact c;
     c.node = node;
     const Vec3 offset = (x - path_.entry) - path_.direction * path_.axial(x);
@@ -447,7 +438,7 @@ class RigidContactNeedle final : public NeedleModel {
     ++caught_;
   }
 
-  void set_values(const Model& model) {
+  void set_values(const ModelView& model) {
     for (std::size_t k = 0; k < contacts_.size(); ++k) {
       const Contact& c = contacts_[k];
       const Vec3 x = path_.entry + (depth_ - c.xi) * path_.direction + c.rho * c.azimuth;

@@ -55,7 +55,7 @@ Outcome run(const json& needle) {
   const test::OneThread one_thread;
   const Scene scene = make_scene(scene_json(needle));
   Simulation simulation(scene, test::catalog());
-  simulation.run(nullptr);
+  simulation.run();
   Outcome out;
   out.status = simulation.needle()->status();
   const Model& model = simulation.model();
@@ -253,7 +253,7 @@ TEST(RigidContact, BeforePunctureTheFootprintFollowsTheTip) {
   const test::OneThread one_thread;
   const Scene scene = make_scene(scene_json(needle));
   Simulation simulation(scene, test::catalog());
-  simulation.run(nullptr);
+  simulation.run();
   const NeedleStatus s = simulation.needle()->status();
   EXPECT_EQ(s.phase, NeedlePhase::indentation);
   EXPECT_LT(s.puncture_depth, 0.0);

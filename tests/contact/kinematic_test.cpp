@@ -45,7 +45,7 @@ Outcome run(const json& needle_options) {
   const Scene scene = validate_scene(parse_scene(scene_json(needle_options).dump(), "kinematic_test.json"),
                                      test::catalog());
   Simulation simulation(scene, test::catalog());
-  simulation.run(nullptr);
+  simulation.run();
   Outcome out;
   out.status = simulation.needle()->status();
   const Model& model = simulation.model();

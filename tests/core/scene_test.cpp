@@ -1,6 +1,8 @@
 // Reading and validating scenes: syntax errors with file:line:column, problems located by line, --set.
 #include <gtest/gtest.h>
 
+#include "mtled/io/run_outputs.hpp"
+#include "mtled/monitors/scene_monitors.hpp"
 #include "mtled/scene.hpp"
 #include "test_support.hpp"
 
@@ -208,6 +210,37 @@ TEST(Scene, SchemaListsComponentsPerRole) {
   EXPECT_TRUE(found);
   EXPECT_EQ(schema["properties"]["discretisation"]["properties"]["integration_points_per_tet"]["enum"],
             json::array({1, 4}));
+}
+
+// The kernel knows its own sections only: "output" and "monitors" are declared by the writers and the checks and
+// passed in. Without them their keys are unknown; with them the scene's values are checked against their
+// declarations and the defaults filled in, and the schema lists them.
+TEST(Scene, SectionsAreDeclaredByTheLibrariesThatReadThem) {
+  const std::string base = R"({"mesh": {"type": "box", "size": [0.01, 0.01, 0.01]}, "shape_function": {"type": "mls"},
+    "materials": [{"type": "neo_hookean", "mu": 1000, "D": 1e-4, "density": 1000}],
+    "integrator": {"type": "dynamic_relaxation"}, "monitors": {"inversion": "warn"})";
+  PluginCatalog catalog({test::plugin_dir()});
+  try {
+    validate_scene(parse_scene(base + "}", "s.json"), catalog);
+    FAIL() << "a section nobody declared was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(problems_text(e).find("unknown top-level key \"monitors\""), std::string::npos) << problems_text(e);
+  }
+  const std::vector<SceneSection> sections = {output_section(), monitors_section()};
+  const Scene scene = validate_scene(parse_scene(base + "}", "s.json"), catalog, sections);
+  EXPECT_EQ(scene.section("monitors").string("inversion"), "warn");
+  EXPECT_EQ(scene.section("output").integer("history_every_steps"), 20);  // its declared default
+  EXPECT_THROW((void)scene.section("no_such_section"), std::logic_error);
+  try {
+    validate_scene(parse_scene(base + R"(, "output": {"cell_data": ["strain"]}})", "s.json"), catalog, sections);
+    FAIL() << "an unknown cell field was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(problems_text(e).find("/output/cell_data"), std::string::npos) << problems_text(e);
+    EXPECT_NE(problems_text(e).find("green_strain"), std::string::npos) << problems_text(e);
+  }
+  const json schema = scene_json_schema(catalog, sections);
+  EXPECT_TRUE(schema["properties"]["monitors"]["properties"].contains("inversion_every_steps")) << schema.dump();
+  EXPECT_FALSE(schema["properties"]["output"]["properties"].contains("type"));
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin_catalog.hpp"
+#include "mtled/analysis/scene_sections.hpp"
 #include "mtled/scene.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -43,8 +44,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     SceneDocument document = parse_scene(text, "fuzz.json", overrides);
     (void)scene_plugin_paths(document);
     (void)document.locate("/materials/0/mu");
-    const Scene scene = validate_scene(std::move(document), catalog);
-    (void)scene.output.string_list("cell_data");
+    const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
+    (void)scene.section("output").string_list("cell_data");
   } catch (const InputError& e) {
     for (const auto& problem : e.problems()) (void)problem.format();  // as the command line prints them
   }

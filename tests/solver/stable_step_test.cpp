@@ -32,7 +32,7 @@ json cube_scene(const json& integrator, const json& monitors, bool loaded, doubl
 }
 
 Scene make_scene(const json& scene) {
-  return validate_scene(parse_scene(scene.dump(), "stable_step_test.json"), test::catalog());
+  return validate_scene(parse_scene(scene.dump(), "stable_step_test.json"), test::catalog(), {monitors_section()});
 }
 
 
@@ -81,7 +81,7 @@ TEST(StableStepMonitor, LanczosEstimateMatchesTheAssembledSpectrum) {
                                             {{"stable_step_every_steps", 1000000}}, false));
   Simulation simulation(scene, test::catalog());
   add_scene_monitors(simulation, scene);
-  simulation.run(nullptr);
+  simulation.run();
   const json report = simulation.monitor_reports().at("stable_step");
   ASSERT_EQ(report.at("checks").get<long>(), 1);
   const double estimate = report.at("last_estimate_s").get<double>();
@@ -106,7 +106,7 @@ TEST(StableStepMonitor, ConstraintProjectionKeepsConstrainedValuesAndIsMOrthogon
   const Scene scene = make_scene(cube_scene({{"type", "dynamic_relaxation"}, {"load_steps", 1}},
                                             {{"stable_step_every_steps", 1000000}}, true, 0.0));
   Simulation simulation(scene, test::catalog());
-  simulation.run(nullptr);
+  simulation.run();
   const Model& model = simulation.model();
   const auto mass = simulation.mass();
   const std::size_t n = 3 * static_cast<std::size_t>(model.node_count());
@@ -153,7 +153,7 @@ TEST(StableStepMonitor, ConstrainedEstimateMatchesTheConstrainedSpectrum) {
                                             {{"stable_step_every_steps", 1000000}}, true, 0.0));
   Simulation simulation(scene, test::catalog());
   add_scene_monitors(simulation, scene);
-  simulation.run(nullptr);
+  simulation.run();
   const json report = simulation.monitor_reports().at("stable_step");
   ASSERT_EQ(report.at("checks").get<long>(), 1);
   const double estimate = report.at("last_estimate_s").get<double>();
@@ -174,7 +174,7 @@ TEST(StableStepMonitor, StopsAStepAboveTheStableStepAtTheFirstCheck) {
   Simulation simulation(scene, test::catalog());
   add_scene_monitors(simulation, scene);
   try {
-    simulation.run(nullptr);
+    simulation.run();
     FAIL() << "a time step 10 times the bound ran";
   } catch (const InstabilityError& e) {
     EXPECT_EQ(e.diagnostic().what, "time_step_above_stable");
@@ -203,12 +203,12 @@ TEST(StableStepMonitor, AdaptsTheStepWhereAFixedStepBlowsUp) {
     const Scene fixed = scene_with({{"stable_step_every_steps", 0}}, 0.9);
     Simulation simulation(fixed, test::catalog());
     add_scene_monitors(simulation, fixed);
-    EXPECT_THROW(simulation.run(nullptr), InstabilityError);
+    EXPECT_THROW(simulation.run(), InstabilityError);
   }
   const Scene adapt = scene_with({{"stable_step_every_steps", 20}}, 0.9);
   Simulation adapted(adapt, test::catalog());
   add_scene_monitors(adapted, adapt);
-  adapted.run(nullptr);
+  adapted.run();
   const json report = adapted.monitor_reports().at("stable_step");
   EXPECT_GE(report.at("time_step_lowered").get<long>(), 1) << report.dump();
   // The integrator took the lowered step, below the setup's (0.9 of the mass-scaled setup estimate).
@@ -218,7 +218,7 @@ TEST(StableStepMonitor, AdaptsTheStepWhereAFixedStepBlowsUp) {
   const Scene small = scene_with({{"stable_step_every_steps", 0}}, 0.05);
   Simulation reference(small, test::catalog());
   add_scene_monitors(reference, small);
-  reference.run(nullptr);
+  reference.run();
   double largest = 0.0, difference = 0.0;
   for (std::size_t i = 0; i < reference.displacement().size(); ++i) {
     largest = std::max(largest, std::abs(reference.displacement()[i]));
@@ -236,7 +236,7 @@ TEST(StableStepMonitor, ChangesNothingInTheResults) {
                                               {{"stable_step_every_steps", every}}, true));
     Simulation simulation(scene, test::catalog());
     add_scene_monitors(simulation, scene);
-    simulation.run(nullptr);
+    simulation.run();
     EXPECT_EQ(simulation.monitor_reports().contains("stable_step"), every != 0);
     return std::vector<double>(simulation.displacement().begin(), simulation.displacement().end());
   };

@@ -14,37 +14,12 @@
 #include "mtled/interfaces/shape_functions.hpp"
 #include "mtled/interfaces/volumetric_treatment.hpp"
 #include "mtled/mesh.hpp"
+#include "mtled/model_view.hpp"
 #include "mtled/point_search.hpp"
+#include "mtled/support_rows.hpp"
 #include "mtled/thread_team.hpp"
 
 namespace mtled {
-
-// Compressed rows: row r has entries offsets[r] .. offsets[r+1]-1.
-struct SupportRows {
-  std::vector<std::int64_t> offsets;
-  std::vector<Index> nodes;
-  std::vector<double> values;  // N_I at the row's point (empty when not stored)
-
-  Index rows() const { return offsets.empty() ? 0 : static_cast<Index>(offsets.size() - 1); }
-  std::int64_t size(Index row) const { return offsets[row + 1] - offsets[row]; }
-};
-
-// The transpose of a relation from `rows` rows (integration points) to `columns` columns (nodes): row c of the
-// result lists, in `nodes`, the rows whose entries name column c, in row order, so that a sum over them runs in
-// one order whatever the thread count. entries_of(row, add) calls add(column) for each entry of the row.
-template <class EntriesOf>
-SupportRows transpose_rows(Index rows, Index columns, EntriesOf&& entries_of) {
-  SupportRows transpose;
-  auto& offsets = transpose.offsets;
-  offsets.assign(static_cast<std::size_t>(columns) + 1, 0);
-  for (Index r = 0; r < rows; ++r) entries_of(r, [&](Index c) { ++offsets[static_cast<std::size_t>(c) + 1]; });
-  for (std::size_t c = 0; c < static_cast<std::size_t>(columns); ++c) offsets[c + 1] += offsets[c];
-  transpose.nodes.resize(static_cast<std::size_t>(offsets.back()));
-  std::vector<std::int64_t> next(offsets.begin(), offsets.end() - 1);
-  for (Index r = 0; r < rows; ++r)
-    entries_of(r, [&](Index c) { transpose.nodes[static_cast<std::size_t>(next[static_cast<std::size_t>(c)]++)] = r; });
-  return transpose;
-}
 
 struct SupportStatistics {
   Index min = 0, max = 0;
@@ -77,6 +52,9 @@ class Model {
   Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
         std::vector<std::shared_ptr<const Material>> region_materials, Options options);
   ~Model();
+
+  // The read-only view drivers, monitors, writers and post-processing get.
+  const ModelView& view() const { return *view_; }
 
   // Geometry
   const TetMesh& mesh() const { return mesh_; }
@@ -189,6 +167,7 @@ class Model {
   std::unique_ptr<ThreadTeam> team_;  // the time step's threads (setup loops use OpenMP)
 
   std::shared_ptr<VolumetricTreatment> volumetric_;
+  std::unique_ptr<ModelView> view_;
 };
 
 }  // namespace mtled

@@ -1,8 +1,9 @@
 #pragma once
-// Checks the time loop runs after every completed step, each its own small component (in the spirit of
-// PETSc's TSMonitorSet): a monitor reads the step just taken, keeps whatever state it needs between steps,
-// stops the run by throwing InstabilityError, and reports its own record into summary.json
-// ("monitors": {name: record}). The step itself knows none of them.
+// What the time loop calls after every completed step, each its own small component (in the spirit of PETSc's
+// TSMonitorSet): a monitor reads the step just taken, keeps whatever state it needs between steps, stops the run by
+// throwing InstabilityError, and reports its own record into summary.json ("monitors": {name: record}); an output
+// writer records the step into its files. The step itself knows none of them.
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <span>
@@ -16,8 +17,8 @@
 
 namespace mtled {
 
-class Model;
-class ConstraintSystem;
+class ModelView;
+class TimeIntegrator;
 
 // What a monitor may change in the run it watches: the stable time step the integrator sizes its next steps by
 // (DiscreteSystem::stable_time_step). Only ever lowered: the stable-step monitor lowers it when the deformed body
@@ -28,40 +29,60 @@ class StepControl {
   virtual void lower_stable_time_step(double stable_time_step) = 0;
 };
 
-// A completed step n -> n + 1, as a monitor sees it.
+// A completed step n -> n + 1, as a monitor or writer sees it: the states, the masses, the constraints' sets and the
+// work they did, the needle, and what the step's sums say. Read-only, apart from the step control.
 struct StepRecord {
-  long step = 0;            // n + 1
+  long step = 0;            // n + 1 (0 before the first step)
   double time = 0.0;        // s, at n + 1
   double step_size = 0.0;   // t(n+1) - t(n)
   double previous_step_size = 0.0;  // t(n) - t(n-1); 0 at the first step
+  double load_fraction = 0.0;       // at n + 1
+  long steady_states = 0;           // equilibria the integrator reported so far (relaxed load increments)
   std::span<const double> u;     // displacements at n + 1 (3 per node)
   std::span<const double> mass;  // per node, as the integrator uses it
   StepSums sums;                 // the step's reductions over the unknowns (increments, energies)
-  const Model* model = nullptr;
+  const ModelView* model = nullptr;
+  const TimeIntegrator* integrator = nullptr;  // the run's (its report())
   // f = f_int(u) for any state u (where the run computes its forces: the CPU, or a backend's device); -1 or the
   // first inadmissible integration point.
   std::function<Index(std::span<const double> u, std::span<double> f)> internal_forces;
-  const ConstraintSystem* constraints = nullptr;
-  const std::vector<NodalConstraints*>* constraint_sets = nullptr;
-  const std::vector<std::vector<Vec3>>* previous_values = nullptr;  // the sets' prescribed values at n
+  // Removes from v (3 per node) what the constraints hold: the subspace the constrained dynamics live in.
+  std::function<void(std::span<double> v)> project_out;
+  // The constraint sets (their prescribed values and reactions at n + 1) and each set's prescribed values at n: the
+  // work the prescribed motions did this step is sum |reaction . (value(n+1) - value(n))| over the constrained
+  // components.
+  std::span<const NodalConstraints* const> constraint_sets;
+  std::span<const std::vector<Vec3>> previous_values;
   bool external_forces = false;                                      // some driver applies forces
   std::optional<NeedleStatus> needle;                                // the scene's needle, where it is now
   double stable_time_step = 0.0;  // the stable step in use for the masses in use (before the integrator's factor)
   double time_step_factor = 1.0;  // the integrator's
   double stable_step_margin = 0.9;  // the integrator's: the largest fraction of the stable step it should take
   StepControl* control = nullptr;  // the run's, while the time loop calls the monitors
+
+  // The kinetic energy central differences conserve (J): 1/2 v(n-1/2) . M v(n+1/2), the product of the two
+  // half-step velocities around step n (StepSums::kinetic_product); 0 before the second step.
+  double kinetic_energy() const {
+    if (!(step_size > 0.0) || !(previous_step_size > 0.0)) return 0.0;
+    return std::abs(0.5 / (step_size * previous_step_size) * sums.kinetic_product);
+  }
 };
 
+// Called by the time loop around every completed step: the checks (mtled/monitors: energy growth, the stable step,
+// folds) and the output writers (mtled/io/run_outputs.hpp: history CSVs, snapshots), in the order added. The step
+// itself knows none of them.
 class StepMonitor {
  public:
   virtual ~StepMonitor();
   virtual std::string name() const = 0;
+  // Once, with the initial state (step 0), before the first step.
+  virtual void before_run(const StepRecord&) {}
   // Throws InstabilityError (naming the step, what and where) to stop the run.
   virtual void after_step(const StepRecord& step) = 0;
   // After the run's last step (the loop ended normally); may throw as after_step does.
   virtual void after_run(const StepRecord&) {}
-  // Its record for summary.json.
-  virtual json report() const = 0;
+  // Its record for summary.json's "monitors" (null: none; writers have none).
+  virtual json report() const { return nullptr; }
 };
 
 }  // namespace mtled

@@ -42,6 +42,13 @@ struct ComponentBlock {
   Parameters parameters;
 };
 
+// A section of a scene read and declared by a library outside the kernel ("output": the writers in io/,
+// "monitors": the checks in monitors/), validated like the kernel's own sections.
+struct SceneSection {
+  std::string key;
+  const ComponentDeclaration* declaration = nullptr;
+};
+
 struct Scene {
   SceneDocument document;
   ComponentBlock mesh;
@@ -53,23 +60,23 @@ struct Scene {
   std::optional<ComponentBlock> volumetric;  // absent: each integration point's own J
   std::optional<ComponentBlock> backend;     // absent: the kernel's own CPU engine
   Parameters discretisation;
-  Parameters output;
-  Parameters monitors;
+  std::map<std::string, Parameters> sections;  // by key, each with its defaults filled in
+
+  // Section `key` (throws std::logic_error when the scene was validated without it).
+  const Parameters& section(const std::string& key) const;
 };
 
-// Kernel sections of a scene, declared like components.
+// The kernel's own section of a scene, declared like components.
 const ComponentDeclaration& discretisation_declaration();
-const ComponentDeclaration& output_declaration();
-const ComponentDeclaration& monitors_declaration();
 
-// Validates the whole scene, loading only the plugins it names. Throws InputError listing every problem,
-// each located with SceneDocument::locate.
-Scene validate_scene(SceneDocument document, PluginCatalog& catalog);
+// Validates the whole scene, loading only the plugins it names, with the sections given (a scene's other
+// top-level keys are problems). Throws InputError listing every problem, each located with SceneDocument::locate.
+Scene validate_scene(SceneDocument document, PluginCatalog& catalog, const std::vector<SceneSection>& sections = {});
 
 // Re-locates the JSON pointers of an InputError raised after validation (while building the model).
 InputError locate_problems(const InputError& error, const SceneDocument& document);
 
-// JSON Schema of scenes, built from every component in the catalog (loads them all).
-json scene_json_schema(PluginCatalog& catalog);
+// JSON Schema of scenes, built from every component in the catalog (loads them all) and the sections given.
+json scene_json_schema(PluginCatalog& catalog, const std::vector<SceneSection>& sections = {});
 
 }  // namespace mtled

@@ -12,7 +12,7 @@
 
 namespace mtled {
 
-class Model;
+class ModelView;
 
 // Displacements a driver prescribes: the *interpolated* displacement u(X_K) = sum_I N_I(X_K) u_I at each
 // listed node K, or at each listed material point X_K (reference coordinates inside the body), for the
@@ -68,10 +68,10 @@ class Driver {
  public:
   virtual ~Driver();
   // Chooses nodes; throws InputError naming the scene pointer when the scene cannot be honoured.
-  virtual void setup(const Model& model) = 0;
+  virtual void setup(const ModelView& model) = 0;
   // Sets the prescribed values (and, for drivers whose node sets change, the sets) for `load`, given the
   // current nodal parameters `u` (3 per node).
-  virtual void update(const LoadState& load, const Model& model, std::span<const double> u) = 0;
+  virtual void update(const LoadState& load, const ModelView& model, std::span<const double> u) = 0;
   // What this driver imposes: the constraint sets it prescribes and the force sets it applies, both filled
   // by update(). Pointers stay valid for the driver's lifetime; the lists are read once, after setup().
   virtual std::vector<NodalConstraints*> constraints() = 0;

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "mtled/interfaces/driver.hpp"
-#include "mtled/model.hpp"
+#include "mtled/model_view.hpp"
 
 namespace mtled {
 
@@ -27,22 +27,22 @@ NeedlePath read_needle_path(const Parameters& p);
 
 // Refuses an entry point that is off the body (no surface node within 1.5 mean edge lengths) or a path
 // that meets no nodes of the body, with the scene pointer and a suggestion.
-void check_needle_enters_body(const NeedlePath& path, const Model& model, const Parameters& p);
+void check_needle_enters_body(const NeedlePath& path, const ModelView& model, const Parameters& p);
 
 // Mean edge length of the surface nodes nearest the entry: the local node spacing where the needle enters.
-double spacing_at_entry(const NeedlePath& path, const Model& model);
+double spacing_at_entry(const NeedlePath& path, const ModelView& model);
 
 // The footprint, the surface nodes the tip meets first: those within half the entry's node `spacing` of the entry's
 // plane and within `radius` of the axis, or the surface node nearest the entry when none is.
-std::vector<Index> footprint_nodes(const NeedlePath& path, const Model& model, double spacing, double radius);
+std::vector<Index> footprint_nodes(const NeedlePath& path, const ModelView& model, double spacing, double radius);
 
 // The puncture test both needle models share: the largest principal Green strain (in absolute value) at the
 // integration points within `radius` of the tip.
 class TipStrainWatch {
  public:
   // Keeps the integration points that a tip anywhere along the path can come within `radius` of.
-  void setup(const NeedlePath& path, const Model& model, double radius);
-  double largest(const Model& model, std::span<const double> u, const Vec3& tip) const;
+  void setup(const NeedlePath& path, const ModelView& model, double radius);
+  double largest(const ModelView& model, std::span<const double> u, const Vec3& tip) const;
 
  private:
   std::vector<Index> watched_;

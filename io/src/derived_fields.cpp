@@ -1,0 +1,66 @@
+#include "mtled/io/derived_fields.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace mtled {
+
+namespace {
+
+Mat3 cauchy_stress(const Mat3& F, const Material& material) {
+  Mat3 S = Mat3::Zero();
+  material.stress(F, S);
+  return F * S * F.transpose() / F.determinant();
+}
+
+void store(const Mat3& m, double* value) {
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) value[3 * a + b] = m(a, b);
+}
+
+}  // namespace
+
+const std::vector<DerivedField>& derived_fields() {
+  static const std::vector<DerivedField> fields = {
+      {"green_strain", 9, "1", "E = (F^T F - I) / 2",
+       [](const Mat3& F, const Material&, double* value) { store(0.5 * (F.transpose() * F - Mat3::Identity()), value); }},
+      {"cauchy_stress", 9, "Pa", "sigma = F S F^T / J",
+       [](const Mat3& F, const Material& material, double* value) { store(cauchy_stress(F, material), value); }},
+      {"von_mises_stress", 1, "Pa", "sqrt(3/2 s:s), s the deviator of the Cauchy stress",
+       [](const Mat3& F, const Material& material, double* value) {
+         const Mat3 cauchy = cauchy_stress(F, material);
+         const Mat3 deviator = cauchy - cauchy.trace() / 3.0 * Mat3::Identity();
+         *value = std::sqrt(1.5 * deviator.squaredNorm());
+       }},
+      {"jacobian", 1, "1", "J = det F, the volume ratio",
+       [](const Mat3& F, const Material&, double* value) { *value = F.determinant(); }},
+  };
+  return fields;
+}
+
+std::vector<CellField> cell_fields(const ModelView& model, std::span<const double> u, const std::vector<std::string>& names) {
+  std::vector<CellField> out;
+  const auto tets = static_cast<std::size_t>(model.mesh().tet_count());
+  for (const auto& name : names) {
+    const auto& all = derived_fields();
+    const auto field = std::find_if(all.begin(), all.end(), [&](const DerivedField& f) { return f.name == name; });
+    if (field == all.end()) throw std::invalid_argument("no derived field \"" + name + "\"");
+    const auto components = static_cast<std::size_t>(field->components);
+    CellField cells{name, field->components, std::vector<double>(tets * components, 0.0)};
+    std::vector<int> count(tets, 0);
+    std::vector<double> value(components);
+    for (Index ip = 0; ip < model.integration_point_count(); ++ip) {
+      field->compute(model.deformation_gradient(ip, u), model.ip_material(ip), value.data());
+      const auto t = static_cast<std::size_t>(model.ip_tets()[ip]);
+      ++count[t];
+      for (std::size_t c = 0; c < components; ++c) cells.values[components * t + c] += value[c];
+    }
+    for (std::size_t t = 0; t < tets; ++t)
+      for (std::size_t c = 0; c < components; ++c) cells.values[t * components + c] /= std::max(count[t], 1);
+    out.push_back(std::move(cells));
+  }
+  return out;
+}
+
+}  // namespace mtled
