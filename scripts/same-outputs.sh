@@ -22,6 +22,7 @@ runs=(
   "cube_central|uniaxial_cube_neohookean.json|/integrator={\"type\":\"central_difference\",\"duration\":0.05,\"damping\":50} /output/every_steps=200"
   "unstable|uniaxial_cube_ogden.json|/integrator/time_step_factor=10 /monitors/stable_step_every_steps=0 /output/every_steps=2"
   "layers|needle_large_sample_layers.json|/mesh/target_nodes=6000 /needle/depth=0.005 /integrator/load_steps=100"
+  "brain|needle_brain_phantom.json|/needle/depth=0.003 /integrator/load_steps=60 /integrator/tolerance=0.05 /output/every_steps=50"
 )
 
 # summary.json less what measures the machine rather than the run.

@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "mtled/instability.hpp"
-#include "mtled/constraints.hpp"
 #include "mtled/interfaces/driver.hpp"
 
 namespace mtled {
