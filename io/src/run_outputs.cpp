@@ -203,6 +203,11 @@ void RunSummary::record_simulation(const Simulation& simulation, double solve_ti
   summary_["integration_points"] = model.integration_point_count();
   summary_["support_size"] = {{"min", stats.min}, {"mean", stats.mean}, {"max", stats.max}};
   summary_["min_reciprocal_condition"] = stats.min_reciprocal_condition;
+  json mesh(model.mesh().statistics);
+  const MeshQuality quality = mesh_quality(model.mesh());
+  mesh["min_dihedral_angle_deg"] = quality.min_dihedral_angle_deg;
+  mesh["min_radius_ratio"] = quality.min_radius_ratio;
+  summary_["mesh"] = mesh;
   summary_["backend"] = simulation.backend();  // with what it counted over the run
   summary_["steps"] = simulation.step();
   summary_["simulated_time_s"] = simulation.time();

@@ -22,6 +22,8 @@ struct TetMesh {
   // The frame the coordinates are in when the file records it ("LPS" or "RAS": 3D Slicer's "SPACE"), else
   // empty. Results carry it on, so that Slicer places them where the mesh was.
   std::string coordinate_system;
+  // What a generator measured while making it (meshing time, the size it chose), for summary.json's "mesh".
+  std::map<std::string, double> statistics;
 
   Index node_count() const { return static_cast<Index>(points.size()); }
   Index tet_count() const { return static_cast<Index>(tets.size()); }
@@ -47,6 +49,14 @@ std::vector<std::array<Index, 3>> boundary_faces(const TetMesh& mesh);
 
 // Per-node flag: 1 if the node lies on a boundary face.
 std::vector<char> surface_nodes(const TetMesh& mesh);
+
+// The worst tet's shape (a regular tet has 70.53 degrees and 1): the smallest dihedral angle (degrees) and the smallest
+// radius ratio 3 r_in / r_circ over all tets.
+struct MeshQuality {
+  double min_dihedral_angle_deg = 0.0;
+  double min_radius_ratio = 0.0;
+};
+MeshQuality mesh_quality(const TetMesh& mesh);
 
 // Per-node mean length of the mesh edges that meet at the node.
 std::vector<double> mean_edge_length_at_nodes(const TetMesh& mesh);

@@ -1,0 +1,166 @@
+// Label maps in: the NRRD and NIfTI readers (io/src/nrrd.cpp, nifti.cpp) against what the writing script put in
+// (sizes, voxel counts, frame, segment names), the mesher (label_map plugin) against the labelled volume, and bad
+// input refused with the file and field. Every label map is written by scripts/label_maps/write_label_map.py, NRRD
+// by hand as 3D Slicer writes it, NIfTI with nibabel.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+
+#include "mtled/errors.hpp"
+#include "mtled/io/label_image.hpp"
+#include "mtled/mesh.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace mtled {
+namespace {
+
+fs::path write_label_map(const std::string& shape, const std::string& name, const std::string& options = "") {
+  const fs::path out = test::scratch_dir("label_map") / name;
+  const std::string command = std::string(MTLED_TEST_PYTHON) + " " +
+                              (test::source_dir() / "scripts/label_maps/write_label_map.py").string() + " " + shape +
+                              " " + out.string() + " " + options;
+  EXPECT_EQ(std::system(command.c_str()), 0) << command;
+  return out;
+}
+
+TetMesh mesh_label_map(const json& block) { return test::make<MeshSource>("label_map", block)->load({{}, 1}); }
+
+double region_volume(const TetMesh& mesh, const std::string& region) {
+  double volume = 0.0;
+  for (Index t = 0; t < mesh.tet_count(); ++t)
+    if (mesh.region_names[static_cast<std::size_t>(mesh.tet_region[static_cast<std::size_t>(t)])] == region)
+      volume += tet_volume(mesh, t);
+  return volume;
+}
+
+// The sphere of radius 0.35 x 16 mm on a 40^3 grid (0.4 mm voxels), in every encoding and both formats: the same
+// grid, the same labels, the frame each format states.
+TEST(LabelMap, EveryFormatReadsTheSameSphere) {
+  const double spacing = 0.4e-3;
+  const std::int64_t expected = [&] {  // the voxel centres inside the sphere, counted here
+    std::int64_t n = 0;
+    for (int i = 0; i < 40; ++i)
+      for (int j = 0; j < 40; ++j)
+        for (int k = 0; k < 40; ++k) {
+          const double x = (i - 19.5) / 40.0, y = (j - 19.5) / 40.0, z = (k - 19.5) / 40.0;
+          n += x * x + y * y + z * z <= 0.35 * 0.35 ? 1 : 0;
+        }
+    return n;
+  }();
+  for (const std::string name : {"raw.nrrd", "gzip.nrrd", "short.nrrd", "sphere.seg.nrrd", "sphere.nii", "sphere.nii.gz"}) {
+    const std::string options = std::string("--size 40") + (name == "raw.nrrd" ? " --encoding raw" : "") +
+                                (name == "short.nrrd" ? " --type int16" : "");
+    const LabelImage image = read_label_image(write_label_map("sphere", name, options));
+    EXPECT_EQ(image.size, (std::array<std::int64_t, 3>{40, 40, 40})) << name;
+    // NRRD writes its geometry as decimal text (17 digits); NIfTI stores it in float32 (7 digits of 7.8 mm).
+    const double tolerance = name.find(".nii") != std::string::npos ? 1e-9 : 1e-12;
+    EXPECT_NEAR((image.spacing() - Vec3::Constant(spacing)).norm(), 0.0, tolerance) << name;
+    EXPECT_NEAR((image.origin - Vec3::Constant(-19.5 * spacing)).norm(), 0.0, tolerance) << name;
+    EXPECT_EQ(image.voxel_counts().at(1), expected) << name;
+    EXPECT_EQ(image.space, name.find(".nii") != std::string::npos ? "RAS" : "LPS") << name;
+    if (name == "sphere.seg.nrrd") {
+      EXPECT_EQ(image.segment_names.at(1), "tissue");
+    }
+  }
+}
+
+// One marked voxel (1, 2, 3) on a rotated, shifted grid: its centre is where the file's geometry puts it (origin +
+// R diag(spacing) (1, 2, 3)), as 3D Slicer shows it, in both formats.
+TEST(LabelMap, AMarkerVoxelLandsWhereTheFilePlacesIt) {
+  const double c = std::cos(0.3), s = std::sin(0.3);
+  const Mat3 rotation = (Mat3() << c, -s, 0, s, c, 0, 0, 0, 1).finished();
+  const Vec3 origin(12.5e-3, -40e-3, 7e-3);
+  const double spacing = 0.5e-3;
+  const std::string options = fmt::format("--size 8 --spacing 0.5 --origin 12.5 -40 7 --directions {} {} 0 {} {} 0 0 0 1",
+                                          c, s, -s, c);  // the axes' directions, one after another
+  for (const std::string name : {"marker.nrrd", "marker.nii.gz"}) {
+    const LabelImage image = read_label_image(write_label_map("marker", name, options));
+    ASSERT_EQ(image.voxel_counts().at(1), 1) << name;
+    EXPECT_EQ(image.at(1, 2, 3), 1) << name;
+    const Vec3 expected = origin + rotation * (spacing * Vec3(1, 2, 3));
+    EXPECT_NEAR((image.voxel_centre(1, 2, 3) - expected).norm(), 0.0, 1e-9) << name;
+  }
+}
+
+// Meshed, each sphere's volume is its labelled voxels' volume to within what the surface criterion allows: facets at
+// most surface_distance d from the labels' boundary, over the area, 3 d / r of the volume (spheres of r = 2.88 mm);
+// and the error shrinks with d. The meshes are valid tets (check_mesh in the plugin).
+TEST(LabelMap, TheMeshedVolumeIsTheLabelledVolume) {
+  const fs::path file = write_label_map("two_spheres", "two.seg.nrrd", "--size 40");
+  const LabelImage image = read_label_image(file);
+  const double voxel = std::pow(0.4e-3, 3), radius = 0.18 * 16e-3;
+  std::map<std::string, double> previous;
+  for (const double d : {0.2e-3, 0.05e-3}) {
+    const TetMesh mesh = mesh_label_map({{"path", file.string()}, {"mesh_size", 0.8e-3}, {"surface_distance", d}});
+    ASSERT_EQ(mesh.region_names.size(), 2u);
+    for (const auto& [label, name] : image.segment_names) {
+      const double labelled = static_cast<double>(image.voxel_counts().at(label)) * voxel;
+      const double error = std::abs(region_volume(mesh, name) / labelled - 1.0);
+      EXPECT_LT(error, 3.0 * d / radius) << name << ", surface_distance " << d;
+      if (previous.count(name) != 0) {
+        EXPECT_LT(error, previous[name]) << name << " did not improve with d";
+      }
+      previous[name] = error;
+      std::printf("%s d=%g: volume error %.4f (bound %.4f)\n", name.c_str(), d, error, 3.0 * d / radius);
+    }
+  }
+  const TetMesh mesh = mesh_label_map({{"path", file.string()}, {"mesh_size", 0.8e-3}});
+  EXPECT_EQ(mesh.coordinate_system, "LPS");
+  EXPECT_FALSE(mesh.node_sets.at("surface").empty());
+  // Only the segment asked for: the other is outside the body.
+  const TetMesh right = mesh_label_map({{"path", file.string()}, {"mesh_size", 0.8e-3}, {"segments", {"right"}}});
+  ASSERT_EQ(right.region_names, std::vector<std::string>{"right"});
+  for (const auto& p : right.points) EXPECT_GT(p[0], -0.5e-3);
+}
+
+// A label map a user would get wrong: each refused with exit 2 and the file and field named.
+TEST(LabelMap, BadLabelMapsAreRefusedNamingTheFileAndField) {
+  const fs::path good = write_label_map("sphere", "good.nrrd", "--size 16 --encoding raw");
+  std::string text = test::read_text(good);
+  const auto expect_refused = [&](const std::string& name, const std::string& content, const std::string& needle) {
+    const fs::path file = test::scratch_dir("label_map") / name;
+    test::write_text(file, content);
+    try {
+      read_label_image(file);
+      ADD_FAILURE() << name << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << name << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << name << ": " << e.what();
+    }
+  };
+  expect_refused("truncated.nrrd", text.substr(0, text.size() - 100), "truncated");
+  const auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    t.replace(t.find(from), from.size(), to);
+    return t;
+  };
+  expect_refused("bzip.nrrd", replaced("encoding: raw", "encoding: bzip2"), "encoding");
+  expect_refused("sheared.nrrd", replaced("space directions: (1,0,0)", "space directions: (1,1,0)"), "not orthogonal");
+  expect_refused("singular.nrrd", replaced("space directions: (1,0,0)", "space directions: (0,0,0)"), "singular");
+  const fs::path gz = write_label_map("sphere", "good.nii.gz", "--size 16");
+  const std::string gzip_text = test::read_text(gz);
+  expect_refused("cut.nii.gz", gzip_text.substr(0, gzip_text.size() / 2), "gzip");
+  expect_refused("noise.nii", std::string(400, '\x7f'), "sizeof_hdr");
+  expect_refused("image.png", "not an image", "unknown label-map format");
+  // Labels the scene names that the image lacks, and an image with nothing labelled.
+  EXPECT_THROW(mesh_label_map({{"path", good.string()}, {"mesh_size", 1e-3}, {"labels", {7}}}), InputError);
+  EXPECT_THROW(mesh_label_map({{"path", good.string()}, {"mesh_size", 1e-3}, {"segments", {"tumor"}}}), InputError);
+  const fs::path empty = write_label_map("marker", "empty.nrrd", "--size 4 --encoding raw");
+  std::string blank = test::read_text(empty);
+  std::fill(blank.end() - 64, blank.end(), '\0');
+  test::write_text(empty, blank);
+  try {
+    mesh_label_map({{"path", empty.string()}, {"mesh_size", 1e-3}});
+    ADD_FAILURE() << "an empty label map was meshed";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("empty"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace mtled
