@@ -147,7 +147,11 @@ LabelImage parse_nifti(const std::string& bytes, const std::string& source) {
     throw InputError(source, fmt::format("scl_slope {} and scl_inter {} rescale the voxels: a label map stores its "
                                          "labels as they are (slope 0 or 1, intercept 0)", slope, intercept));
   const StoredType type = stored_type(h.get<std::int16_t>(l.datatype), source);
-  const std::int64_t offset = l.wide ? h.get<std::int64_t>(l.vox_offset) : static_cast<std::int64_t>(h.get<float>(l.vox_offset));
+  const double stored_offset = l.wide ? static_cast<double>(h.get<std::int64_t>(l.vox_offset)) : h.get<float>(l.vox_offset);
+  if (!(stored_offset >= 0.0 && stored_offset <= static_cast<double>(bytes.size())))  // NaN too (found by fuzzing)
+    throw InputError(source, fmt::format("vox_offset: {} is not a position in the file ({} bytes)", stored_offset,
+                                         bytes.size()));
+  const auto offset = static_cast<std::int64_t>(stored_offset);
   const std::int64_t count = image.size[0] * image.size[1] * image.size[2];
   if (offset < static_cast<std::int64_t>(l.header_size) || static_cast<std::size_t>(offset) > bytes.size() ||
       bytes.size() - static_cast<std::size_t>(offset) < static_cast<std::size_t>(count * type.bytes))

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <fstream>
 #include <numbers>
 
@@ -164,6 +166,11 @@ TEST(LabelMap, BadLabelMapsAreRefusedNamingTheFileAndField) {
   const std::string gzip_text = test::read_text(gz);
   expect_refused("cut.nii.gz", gzip_text.substr(0, gzip_text.size() / 2), "gzip");
   expect_refused("noise.nii", std::string(400, '\x7f'), "sizeof_hdr");
+  // A NIfTI-1 header whose vox_offset (the float at byte 108) is NaN (found by fuzz_label_map).
+  std::string nifti = test::read_text(write_label_map("sphere", "good.nii", "--size 16"));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::memcpy(nifti.data() + 108, &nan, sizeof nan);
+  expect_refused("nan_offset.nii", nifti, "vox_offset");
   expect_refused("image.png", "not an image", "unknown label-map format");
   // Labels the scene names that the image lacks, and an image with nothing labelled.
   EXPECT_THROW(mesh_label_map({{"path", good.string()}, {"mesh_size", 1e-3}, {"labels", {7}}}), InputError);
