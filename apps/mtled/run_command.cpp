@@ -122,10 +122,10 @@ class SceneRun {
 
   // result.vtu, then summary.json with status "ok": the needle, the reactions and the error indicators.
   int succeeded(double solve_time) {
-    write_state(folder_, "result.vtu", simulation_->model().view(), simulation_->displacement(), scene_.section("output"),
-                true);
+    const auto u = write_state(folder_, "result.vtu", simulation_->model().view(), simulation_->displacement(),
+                               scene_.section("output"), true);
     record(solve_time);
-    summary_.record_result(*simulation_);
+    summary_.record_result(*simulation_, u);
     summary_["error_indicators"] = error_indicators(*simulation_);
     summary_["status"] = "ok";
     summary_.write();

@@ -484,6 +484,13 @@ InputError locate_problems(const InputError& error, const SceneDocument& documen
 }
 
 json scene_json_schema(PluginCatalog& catalog, const std::vector<SceneSection>& sections) {
+  // A section is not a component: no "type", every key optional.
+  auto section_schema = [](const ComponentDeclaration& declaration) {
+    json schema = declaration.to_json_schema();
+    schema["properties"].erase("type");
+    schema["required"] = json::array();
+    return schema;
+  };
   auto one_of = [&](Category category) {
     json options = json::array();
     for (const auto& name : catalog.names(category)) {
@@ -512,14 +519,8 @@ json scene_json_schema(PluginCatalog& catalog, const std::vector<SceneSection>& 
       {"integrator", one_of(Category::integrator)},
       {"volumetric", optional(one_of(Category::volumetric))},
       {"backend", optional(one_of(Category::backend))},
-      {"discretisation", discretisation_declaration().to_json_schema()}};
-  for (const auto& section : sections) properties[section.key] = section.declaration->to_json_schema();
-  std::vector<std::string> declared = {"discretisation"};  // sections, not components: no "type"
-  for (const auto& section : sections) declared.push_back(section.key);
-  for (const auto& section : declared) {
-    properties[section]["properties"].erase("type");
-    properties[section]["required"] = json::array();
-  }
+      {"discretisation", section_schema(discretisation_declaration())}};
+  for (const auto& section : sections) properties[section.key] = section_schema(*section.declaration);
   return {{"$schema", "https://json-schema.org/draft/2020-12/schema"},
           {"$id", "https://mtled.org/schema/scene.json"},
           {"title", "mtled scene"},

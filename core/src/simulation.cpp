@@ -12,7 +12,6 @@
 
 namespace mtled {
 
-
 namespace {
 
 template <class Interface>

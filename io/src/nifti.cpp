@@ -110,8 +110,8 @@ void place_by_sform(LabelImage& image, const HeaderReader& h, const Layout& l, d
 
 LabelImage parse_nifti(const std::string& bytes, const std::string& source) {
   if (bytes.size() < 4) throw InputError(source, "not a NIfTI file: shorter than its header");
-  const bool swap = HeaderReader(bytes, false).get<std::int32_t>(0) != 348 &&
-                    HeaderReader(bytes, false).get<std::int32_t>(0) != 540;
+  const std::int32_t native_size = HeaderReader(bytes, false).get<std::int32_t>(0);
+  const bool swap = native_size != 348 && native_size != 540;
   const std::int32_t header_size = HeaderReader(bytes, swap).get<std::int32_t>(0);
   if (header_size != 348 && header_size != 540)
     throw InputError(source, "not a NIfTI file: sizeof_hdr is neither 348 (NIfTI-1) nor 540 (NIfTI-2)");

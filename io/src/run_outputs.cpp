@@ -156,8 +156,7 @@ std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulat
                                                              const OutputFolder& folder) {
   const Parameters& output = scene.section("output");
   std::vector<std::shared_ptr<OutputWriter>> writers;
-  if (simulation.needle() != nullptr || !simulation.constraint_sets().empty())
-    writers.push_back(std::make_shared<HistoryWriter>(folder, output));
+  writers.push_back(std::make_shared<HistoryWriter>(folder, output));  // opens only the files the run has rows for
   if (output.integer("every_steps") > 0) writers.push_back(std::make_shared<SnapshotWriter>(folder, output));
   for (const auto& writer : writers) simulation.add_monitor(writer);
   return writers;
@@ -165,12 +164,13 @@ std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulat
 
 // ---- the final state and the summary
 
-void write_state(const OutputFolder& folder, const std::string& file, const ModelView& model, std::span<const double> u,
-                 const Parameters& output, bool with_cell_data) {
+std::vector<double> write_state(const OutputFolder& folder, const std::string& file, const ModelView& model,
+                                std::span<const double> u, const Parameters& output, bool with_cell_data) {
   std::vector<double> interpolated(u.size());
   model.interpolate(u, interpolated);
   const auto fields = with_cell_data ? cell_fields(model, u, output.string_list("cell_data")) : std::vector<CellField>{};
   folder.write_file(file, [&](std::ostream& out) { write_vtu(out, model.mesh(), interpolated, fields, vtu_format(output)); });
+  return interpolated;
 }
 
 namespace {
@@ -224,8 +224,7 @@ void RunSummary::record_simulation(const Simulation& simulation, double solve_ti
   summary_["time_step_s"] = report.time_step;
 }
 
-void RunSummary::record_result(const Simulation& simulation) {
-  const auto u = simulation.interpolated_displacement();
+void RunSummary::record_result(const Simulation& simulation, std::span<const double> u) {
   double max_displacement = 0.0;
   for (std::size_t i = 0; i < u.size(); i += 3)
     max_displacement = std::max(max_displacement, std::sqrt(u[i] * u[i] + u[i + 1] * u[i + 1] + u[i + 2] * u[i + 2]));

@@ -133,14 +133,15 @@ class LabelMapMesh final : public MeshSource {
     std::filesystem::path file = p_.string("path");
     if (file.is_relative()) file = context.scene_directory / file;
     const LabelImage image = read_label_image(file);
-    const std::set<std::int32_t> meshed = meshed_labels(image);
+    const auto counts = image.voxel_counts();
+    const std::set<std::int32_t> meshed = meshed_labels(image, counts);
     CGAL::Random random(0);
     const CGAL::Image_3 cgal = cgal_image(image, meshed);
     const CGAL::Image_3 weights = p_.boolean("smooth") ? label_weights(cgal) : CGAL::Image_3();
     const Domain domain = Domain::create_labeled_image_mesh_domain(
         cgal, CGAL::parameters::weights = weights, CGAL::parameters::relative_error_bound = 1e-6,
         CGAL::parameters::p_rng = &random);
-    double h = mesh_size(image, meshed);
+    double h = mesh_size(image, meshed, counts);
     const double distance = p_.optional_number("surface_distance").value_or(image.spacing().maxCoeff());
     if (p_.has("target_nodes")) {  // a trial refinement first, to size h by its count (N ~ 1 / h^3)
       const double target = static_cast<double>(p_.integer("target_nodes"));
@@ -159,8 +160,7 @@ class LabelMapMesh final : public MeshSource {
   }
 
  private:
-  std::set<std::int32_t> meshed_labels(const LabelImage& image) const {
-    const auto counts = image.voxel_counts();
+  std::set<std::int32_t> meshed_labels(const LabelImage& image, const std::map<std::int32_t, std::int64_t>& counts) const {
     std::set<std::int32_t> meshed;
     const auto values = p_.has("labels") ? p_.number_list("labels") : std::vector<double>{};
     const auto names = p_.has("segments") ? p_.string_list("segments") : std::vector<std::string>{};
@@ -204,11 +204,12 @@ class LabelMapMesh final : public MeshSource {
     return fmt::format("{}", fmt::join(parts, ", "));
   }
 
-  double mesh_size(const LabelImage& image, const std::set<std::int32_t>& meshed) const {
+  double mesh_size(const LabelImage& image, const std::set<std::int32_t>& meshed,
+                   const std::map<std::int32_t, std::int64_t>& counts) const {
     if (p_.has("mesh_size")) return p_.number("mesh_size");
     const Vec3 s = image.spacing();
     std::int64_t voxels = 0;
-    for (const auto& [label, count] : image.voxel_counts())
+    for (const auto& [label, count] : counts)
       if (meshed.count(label) != 0) voxels += count;
     const double volume = static_cast<double>(voxels) * s[0] * s[1] * s[2];
     return std::cbrt(kNodesPerCellVolume * volume / static_cast<double>(p_.integer("target_nodes")));
