@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <string_view>
 #include <thread>
 
 #include "mtled/analysis/study.hpp"
@@ -23,21 +24,22 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-struct ChildOutcome {
-  int exit_code = -1;
-  int signal = 0;
-  bool timed_out = false;
-  double elapsed_s = 0.0;
-  double max_rss_mb = 0.0;
-};
-
-ChildOutcome run_child(const fs::path& executable, const std::vector<std::string>& arguments, const fs::path& log_file,
+RunOutcome run_child(const fs::path& executable, const std::vector<std::string>& arguments, const fs::path& log_file,
                        double timeout_s) {
   std::vector<std::string> args{executable.string()};
   args.insert(args.end(), arguments.begin(), arguments.end());
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
+  // A run is its own job: an MPI launcher's variables (a study spread over ranks) would make it join the study's.
+  std::vector<char*> envp;
+  for (char** e = environ; *e != nullptr; ++e) {
+    const std::string_view entry(*e);
+    if (!entry.starts_with("OMPI_") && !entry.starts_with("PMIX_") && !entry.starts_with("PMI_") &&
+        !entry.starts_with("OPAL_"))
+      envp.push_back(*e);
+  }
+  envp.push_back(nullptr);
   const std::string log_path = log_file.string();
 
   const auto start = Clock::now();
@@ -52,10 +54,10 @@ ChildOutcome run_child(const fs::path& executable, const std::vector<std::string
     }
     const int null = ::open("/dev/null", O_RDONLY);
     if (null >= 0) ::dup2(null, STDIN_FILENO);
-    ::execv(argv[0], argv.data());
+    ::execve(argv[0], argv.data(), envp.data());
     ::_exit(127);
   }
-  ChildOutcome outcome;
+  RunOutcome outcome;
   int status = 0;
   rusage usage{};
   bool terminated = false;
@@ -94,7 +96,7 @@ void fill(Row& row, const json& summary) {
 
 
 // The row's status and message from how the child ended and what its summary says.
-void explain_failure(Row& row, const ChildOutcome& outcome, double timeout_s, const fs::path& folder) {
+void explain_failure(Row& row, const RunOutcome& outcome, double timeout_s, const fs::path& folder) {
   const json& summary = row.summary;
   if (outcome.timed_out) {
     row.status = "timeout";
@@ -136,30 +138,39 @@ Row Runner::reused(const Configuration& c, const std::string& counter) const {
     row.reused = true;
     row.exit_code = 0;
     fill(row, summary);
-    fmt::print(stderr, "study {} {}: reused the earlier run in {}\n", counter, c.label, folder.string());
+    if (!counter.empty()) fmt::print(stderr, "study {} {}: reused the earlier run in {}\n", counter, c.label, folder.string());
   }
   return row;
 }
 
-Row Runner::run(const Configuration& c, const std::string& counter) {
-  const fs::path folder = runs_ / c.folder;
-  const fs::path scene = fs::absolute(study_.scene);
-  if (settings_.reuse) {
-    Row row = reused(c, counter);
-    if (row.reused) return row;
-  }
-  std::error_code ec;
-  fs::remove_all(folder, ec);
-  fs::create_directories(folder);
-  std::vector<std::string> arguments{"run", scene.string(), "-o", folder.string(), "--no-progress",
-                                     "--log-level", settings_.log_level};
+std::vector<std::string> Runner::arguments(const Configuration& c) const {
+  std::vector<std::string> arguments{"run", fs::absolute(study_.scene).string(), "-o", (runs_ / c.folder).string(),
+                                     "--no-progress", "--log-level", settings_.log_level};
   for (const auto& o : c.overrides) arguments.insert(arguments.end(), {"--set", o});
   if (threads_ > 0) arguments.insert(arguments.end(), {"--threads", std::to_string(threads_)});
   for (const auto& p : settings_.plugin_paths) arguments.insert(arguments.end(), {"--plugin-path", fs::absolute(p).string()});
+  return arguments;
+}
+
+Row Runner::run(const Configuration& c, const std::string& counter) {
+  return record(c, settings_.gather ? outcome_from_folder(c) : execute(c, counter));
+}
+
+RunOutcome Runner::execute(const Configuration& c, const std::string& counter) {
+  if (settings_.reuse && reused(c, counter).reused) return RunOutcome{.reused = true, .exit_code = 0};
+  const fs::path folder = runs_ / c.folder;
+  std::error_code ec;
+  fs::remove_all(folder, ec);
+  fs::create_directories(folder);
   fmt::print(stderr, "study {} {}: running\n", counter, c.label);
+  return run_child(executable_, arguments(c), folder / "mtled.log", study_.timeout_s);
+}
+
+Row Runner::record(const Configuration& c, const RunOutcome& outcome) const {
+  if (outcome.reused) return reused(c, "");
+  const fs::path folder = runs_ / c.folder;
   Row row;
   row.configuration = &c;
-  const ChildOutcome outcome = run_child(executable_, arguments, folder / "mtled.log", study_.timeout_s);
   row.exit_code = outcome.signal ? 128 + outcome.signal : outcome.exit_code;
   const json summary = read_json_file(folder / "summary.json");
   fill(row, summary);
@@ -169,5 +180,25 @@ Row Runner::run(const Configuration& c, const std::string& counter) {
   return row;
 }
 
+std::string Runner::command_line(const Configuration& c) const {
+  // Single quotes around every word (a quote inside one closes, escapes and reopens it).
+  const auto quote = [](const std::string& word) {
+    std::string out = "'";
+    for (const char ch : word) out += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+    return out + "'";
+  };
+  const fs::path folder = runs_ / c.folder;
+  std::string line = "mkdir -p " + quote(folder.string()) + " && " + quote(executable_.string());
+  for (const auto& a : arguments(c)) line += " " + quote(a);
+  return line + " > " + quote((folder / "mtled.log").string()) + " 2>&1";
+}
+
+RunOutcome Runner::outcome_from_folder(const Configuration& c) const {
+  const json summary = read_json_file(runs_ / c.folder / "summary.json");
+  const std::string status = summary.is_object() ? summary.value("status", "") : "";
+  RunOutcome outcome;
+  outcome.exit_code = status == "ok" ? 0 : status == "unstable" ? 3 : status == "invalid_input" ? 2 : 1;
+  return outcome;
+}
 
 }  // namespace mtled::study

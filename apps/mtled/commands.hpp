@@ -39,6 +39,8 @@ struct StudyOptions {
   bool reuse = false;            // keep runs whose folder already holds an "ok" result of the same settings
   std::vector<std::filesystem::path> plugin_paths;
   std::string log_level = "info";  // passed to every run
+  std::filesystem::path job_list;  // write every run's command line here instead of running (a batch scheduler's jobs)
+  bool gather = false;             // run nothing: measure and report the runs the job list made
 };
 
 struct ConformanceOptions {

@@ -10,6 +10,7 @@
 #include "mtled/log.hpp"
 #include "mtled/simd.hpp"
 #include "mtled/version.hpp"
+#include "ranks.hpp"
 
 namespace {
 
@@ -93,6 +94,11 @@ void add_analysis_commands(CLI::App& cli, Commands& c) {
       ->check(CLI::NonNegativeNumber);
   c.study_cmd->add_flag("--reuse", c.study.reuse,
                         "keep runs whose folder already holds a successful result of the same scene and settings");
+  c.study_cmd->add_option("--job-list", c.study.job_list,
+                          "write one command line per run to this file instead of running them (for a batch "
+                          "scheduler); then --gather");
+  c.study_cmd->add_flag("--gather", c.study.gather,
+                        "run nothing: measure the runs a job list made in the study's folder and write the report");
 }
 
 int dispatch(Commands& c) {
@@ -114,8 +120,31 @@ int dispatch(Commands& c) {
 
 }  // namespace
 
+// Under mpirun, the commands other than run and study compute nothing that ranks could share.
+bool runs_on_these_ranks(const Commands& c) {
+  if (mtled::app::ranks().count == 1 || *c.run_cmd || *c.study_cmd) return true;
+  mtled::log().error("this command runs on one process: run it without mpirun (`mtled run` and `mtled study` use "
+                     "several ranks)");
+  return false;
+}
+
+// A rank's error: rank 0's as it is, the others' prefixed with their rank (a failure only one rank met names it).
+void report(const std::string& message) {
+  const auto& r = mtled::app::ranks();
+  if (r.rank == 0)
+    mtled::log().error("{}", message);
+  else
+    mtled::log().error("rank {} of {}: {}", r.rank, r.count, message);
+}
+
 int main(int argc, char** argv) {
   using namespace mtled;
+  try {
+    app::start_ranks(argc, argv);
+  } catch (const InputError& e) {
+    for (const auto& problem : e.problems()) log().error("{}", problem.format());
+    return 2;
+  }
   CLI::App cli{"mtled: meshless total Lagrangian explicit dynamics for needle insertion into soft tissue"};
   cli.set_version_flag("--version", MTLED_VERSION_STRING);
   cli.require_subcommand(1);
@@ -130,19 +159,24 @@ int main(int argc, char** argv) {
     const int code = cli.exit(e);
     return code == 0 ? 0 : 2;
   }
-  set_log_level(c.log_level);
+  // The other ranks say only what went wrong; rank 0 tells the run.
+  set_log_level(app::ranks().writes() ? c.log_level : "error");
+  if (!runs_on_these_ranks(c)) return 2;
   c.run.scene.plugin_paths = c.validate.plugin_paths = c.mesh.scene.plugin_paths = c.study.plugin_paths = c.plugin_paths;
   c.study.log_level = c.log_level;
+  int code = 1;
   try {
-    return dispatch(c);
+    code = dispatch(c);
   } catch (const InputError& e) {
-    for (const auto& problem : e.problems()) log().error("{}", problem.format());
+    for (const auto& problem : e.problems()) report(problem.format());
     return 2;
   } catch (const InstabilityError& e) {
-    log().error("{}", e.what());
-    return 3;
+    report(e.what());
+    code = 3;
   } catch (const std::exception& e) {
-    log().error("{}", e.what());
+    report(e.what());
     return 1;
   }
+  if (code == 0 || code == 3) app::stop_ranks();  // every rank ends alike only then (ranks.hpp)
+  return code;
 }

@@ -17,6 +17,7 @@
 #include "mtled/simd.hpp"
 #include "mtled/version.hpp"
 #include "progress.hpp"
+#include "ranks.hpp"
 
 namespace fs = std::filesystem;
 
@@ -53,6 +54,7 @@ class SceneRun {
       const auto setup_start = Clock::now();
       simulation_ = std::make_unique<Simulation>(scene_, catalog_);
       add_scene_monitors(*simulation_, scene_);
+      if (auto failure = injected_failure()) simulation_->add_monitor(failure);
       writers_ = add_scene_writers(*simulation_, scene_, folder_);
       writers_.push_back(std::make_shared<ProgressWriter>(progress, interrupted));
       simulation_->add_monitor(writers_.back());
@@ -146,13 +148,41 @@ class SceneRun {
   std::vector<std::shared_ptr<OutputWriter>> writers_;
 };
 
+// On several ranks the scene runs on the mpi backend; a scene that names another cannot.
+void choose_rank_backend(SceneDocument& document) {
+  if (ranks().count == 1) return;
+  json& root = document.root;
+  if (root.contains("backend") && root["backend"].is_object() && root["backend"].value("type", "") != "mpi")
+    throw InputError(document.locate("/backend/type"),
+                     fmt::format("the {} backend runs on one process, and this run has {} ranks: run without "
+                                 "mpirun, or leave out /backend (and --backend) to run on the ranks",
+                                 root["backend"].value("type", "?"), ranks().count));
+  root["backend"] = {{"type", "mpi"}};
+}
+
+// A rank other than 0: the same simulation and checks, which take part in every exchange of forces; no files.
+int replica_run(const RunOptions& options, const Scene& scene, PluginCatalog& catalog) {
+  omp_set_num_threads(thread_count(options));
+  Simulation simulation(scene, catalog);
+  add_scene_monitors(simulation, scene);
+  if (auto failure = injected_failure()) simulation.add_monitor(failure);
+  try {
+    simulation.run();
+  } catch (const InstabilityError&) {
+    return 3;  // rank 0 reports it
+  }
+  return 0;
+}
+
 }  // namespace
 
 int run_scene(const RunOptions& options) {
   const auto wall_start = Clock::now();
   SceneDocument document = read_scene(options.scene.scene, options.scene.overrides);
+  choose_rank_backend(document);
   PluginCatalog catalog(plugin_search_path(options.scene.plugin_paths, scene_plugin_paths(document)));
   const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
+  if (!ranks().writes()) return replica_run(options, scene, catalog);
   SceneRun run(options, scene, catalog, wall_start);
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);

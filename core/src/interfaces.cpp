@@ -29,6 +29,7 @@ StepMonitor::~StepMonitor() = default;
 StepControl::~StepControl() = default;
 DiscreteSystem::~DiscreteSystem() = default;
 StepEngine::~StepEngine() = default;
+std::vector<int> StepEngine::cell_groups(const TetMesh&) { return {}; }
 
 IncrementSums DiscreteSystem::evaluate_forces(bool increment_sums) {
   const auto u = displacement();

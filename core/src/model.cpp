@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include "force_kernel.hpp"
 #include "mtled/log.hpp"
@@ -59,7 +60,7 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   length_scale_ = (hi - lo).norm();
   node_search_ = std::make_unique<PointSearch>(mesh_.points);
 
-  build_integration_points(options.integration_points_per_tet);
+  build_integration_points(options.integration_points_per_tet, options.cell_groups);
   build_supports(options.precision);
   build_time_steps();
   const std::size_t padded = 4 * (static_cast<std::size_t>(node_count()) + 1);
@@ -78,15 +79,28 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
 
 Model::~Model() = default;
 
-void Model::build_integration_points(int points_per_tet) {
+void Model::build_integration_points(int points_per_tet, const std::vector<int>& cell_groups) {
   if (points_per_tet != 1 && points_per_tet != 4)
     throw InputError("/discretisation/integration_points_per_tet", "must be 1 or 4");
+  if (!cell_groups.empty() && cell_groups.size() != mesh_.tets.size())
+    throw std::logic_error("Model: one cell group per tet is required");
   const std::size_t count = mesh_.tets.size() * static_cast<std::size_t>(points_per_tet);
   ip_position_.reserve(count);
   ip_weight_.reserve(count);
   ip_tet_.reserve(count);
   ip_material_.reserve(count);
-  for (Index t = 0; t < mesh_.tet_count(); ++t) {
+  std::vector<Index> order(mesh_.tets.size());
+  std::iota(order.begin(), order.end(), Index{0});
+  const int groups = cell_groups.empty() ? 1 : *std::max_element(cell_groups.begin(), cell_groups.end()) + 1;
+  group_offsets_.assign(static_cast<std::size_t>(groups) + 1, 0);
+  if (!cell_groups.empty()) {
+    std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) { return cell_groups[a] < cell_groups[b]; });
+    for (const int g : cell_groups) group_offsets_[static_cast<std::size_t>(g) + 1] += points_per_tet;
+  } else {
+    group_offsets_[1] = static_cast<Index>(count);
+  }
+  std::partial_sum(group_offsets_.begin(), group_offsets_.end(), group_offsets_.begin());
+  for (const Index t : order) {
     const auto& tet = mesh_.tets[t];
     const double volume = tet_volume(mesh_, t);
     const Vec3* v[4] = {&mesh_.points[tet[0]], &mesh_.points[tet[1]], &mesh_.points[tet[2]], &mesh_.points[tet[3]]};
@@ -406,7 +420,12 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
   if (volumetric_) return volumetric_->internal_forces(*this, u, f);
-  const std::int64_t n = integration_point_count();
+  return internal_forces(u, f, {0, integration_point_count()});
+}
+
+Index Model::internal_forces(std::span<const double> u, std::span<double> f, std::pair<Index, Index> points) const {
+  if (volumetric_) throw std::logic_error("Model::internal_forces over a range of points with a volumetric treatment");
+  const std::int64_t first = points.first, n = points.second - points.first;
   std::vector<Index>& first_bad = thread_first_bad_;
   team_->run([&](int thread) {
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
@@ -416,7 +435,7 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
     // Contiguous shares, so that each thread's batches are consecutive points.
     const auto [begin, end] = ThreadTeam::share(n, thread, team_->size());
     first_bad[static_cast<std::size_t>(thread)] =
-        accumulate_forces(static_cast<Index>(begin), static_cast<Index>(end), local.data());
+        accumulate_forces(static_cast<Index>(first + begin), static_cast<Index>(first + end), local.data());
     team_->barrier();
     reduce_thread_forces(f, thread);
   });

@@ -97,7 +97,8 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   engine_ = scene.backend ? build<StepEngine>(catalog, *scene.backend) : make_cpu_engine();
   TetMesh mesh = load_scene_mesh(scene, catalog);
   auto materials = region_materials(scene, catalog, mesh);
-  build_model(scene, catalog, std::move(mesh), std::move(materials));
+  std::vector<int> cell_groups = engine_->cell_groups(mesh);
+  build_model(scene, catalog, std::move(mesh), std::move(materials), std::move(cell_groups));
   build_drivers(scene, catalog);
   if (scene.backend)
     guarded(scene.backend->parameters, "setting up the backend", [&] { engine_->setup(*model_); });
@@ -118,7 +119,7 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
 }
 
 void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
-                             std::vector<std::shared_ptr<const Material>> materials) {
+                             std::vector<std::shared_ptr<const Material>> materials, std::vector<int> cell_groups) {
   auto shape_functions = build<ShapeFunctions>(catalog, scene.shape_function);
   Model::Options options;
   options.integration_points_per_tet = static_cast<int>(scene.discretisation.integer("integration_points_per_tet"));
@@ -126,6 +127,7 @@ void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh
   options.precision = scene.discretisation.string("precision") == "single" ? RowPrecision::single_precision
                                                                            : RowPrecision::double_precision;
   if (scene.volumetric) options.volumetric = build<VolumetricTreatment>(catalog, *scene.volumetric);
+  options.cell_groups = std::move(cell_groups);
   model_ = std::make_unique<Model>(std::move(mesh), shape_functions, std::move(materials), options);
   const SupportStatistics stats = model_->ip_support_statistics();
   log().info("model: {} nodes, {} integration points, support size min/mean/max {}/{:.1f}/{}", model_->node_count(),

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 
 #include "test_support.hpp"
@@ -176,6 +177,49 @@ TEST(Study, NrmseAgainstAReferenceRun) {
   ASSERT_EQ(result.exit_code, 0) << result.output;
   expect_contains(result.output, "target_nodes=450: reused");
   EXPECT_TRUE(read_json(out / "study.json")["configurations"][0]["reused"].get<bool>());
+}
+
+// The columns of study.csv that do not depend on when or where a run ran (times, memory and the Pareto marking do).
+std::vector<std::vector<std::string>> measured_columns(const fs::path& csv) {
+  const auto rows = read_csv(csv);
+  std::vector<std::vector<std::string>> out;
+  for (const auto& row : rows) {
+    std::vector<std::string> kept;
+    for (const char* name : {"label", "status", "exit_code", "nodes", "steps", "error", "nrmse_x", "nrmse_y", "nrmse_z"})
+      kept.push_back(row[column(rows[0], name)]);
+    out.push_back(kept);
+  }
+  return out;
+}
+
+// --job-list writes the runs as command lines (a batch scheduler's jobs); run by hand here, then --gather reports
+// them exactly as the study run in one go does.
+TEST(Study, AJobListRunLineByLineThenGatheredGivesTheSameReport) {
+  const fs::path folder = scratch_dir("study-jobs");
+  const json study = {{"scene", kSmallCube.string()},
+                      {"threads", 1},
+                      {"metric", "nrmse"},
+                      {"reference", {{"label", "dense"}, {"set", {{"/mesh/target_nodes", 500}}}}},
+                      {"sweep", {{"/mesh/target_nodes", {250, 350}}}}};
+  write_text(folder / "study.json", study.dump(2));
+  const fs::path direct = folder / "direct", jobs = folder / "jobs";
+  ASSERT_EQ(run_mtled({"study", (folder / "study.json").string(), "-o", direct.string()}).exit_code, 0);
+
+  const auto listed = run_mtled({"study", (folder / "study.json").string(), "-o", jobs.string(), "--job-list",
+                                 (folder / "jobs.txt").string()});
+  ASSERT_EQ(listed.exit_code, 0) << listed.output;
+  EXPECT_FALSE(fs::exists(jobs / "runs" / "dense" / "summary.json")) << "a job list runs nothing";
+  std::istringstream lines(read_text(folder / "jobs.txt"));
+  std::string line;
+  int count = 0;
+  while (std::getline(lines, line)) {
+    ++count;
+    EXPECT_EQ(std::system(line.c_str()), 0) << line;  // sh -c, as a scheduler runs it
+  }
+  EXPECT_EQ(count, 3);  // the reference and the two sweep points
+  const auto gathered = run_mtled({"study", (folder / "study.json").string(), "-o", jobs.string(), "--gather"});
+  ASSERT_EQ(gathered.exit_code, 0) << gathered.output;
+  EXPECT_EQ(measured_columns(jobs / "study.csv"), measured_columns(direct / "study.csv"));
 }
 
 // A configuration's own reference_value (a material sweep, each with its exact force) replaces the study's.

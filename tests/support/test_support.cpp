@@ -123,7 +123,8 @@ json gel_cylinder_scene(double height, const json& needle) {
            {{"type", "dynamic_relaxation"}, {"load_steps", 300}, {"load_curve", "linear"}, {"tolerance", 1e-3}}}};
 }
 
-CommandResult run_mtled(const std::vector<std::string>& arguments, const std::vector<std::string>& environment) {
+CommandResult run_mtled(const std::vector<std::string>& arguments, const std::vector<std::string>& environment,
+                        const std::vector<std::string>& launcher) {
   auto quote = [](const std::string& s) {
     std::string q = "'";
     for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
@@ -137,6 +138,7 @@ CommandResult run_mtled(const std::vector<std::string>& arguments, const std::ve
       command += " " + quote(e);
     }
   }
+  for (const auto& word : launcher) command += " " + quote(word);
   command += " " + quote(configured("MTLED_TEST_EXECUTABLE", MTLED_EXECUTABLE).string());
   for (const auto& a : arguments) command += " " + quote(a);
   command += " 2>&1";

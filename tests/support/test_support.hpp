@@ -60,8 +60,9 @@ struct CommandResult {
   std::string output;  // stdout and stderr together
 };
 // Runs the mtled executable with `arguments`; `environment` entries are set for the child ("NAME=value";
-// "NAME=" unsets).
-CommandResult run_mtled(const std::vector<std::string>& arguments, const std::vector<std::string>& environment = {});
+// "NAME=" unsets); `launcher` goes before the executable (mpirun -np 2, timeout 60, ...).
+CommandResult run_mtled(const std::vector<std::string>& arguments, const std::vector<std::string>& environment = {},
+                        const std::vector<std::string>& launcher = {});
 
 // Reads a whole file / parses a JSON file.
 std::string read_text(const std::filesystem::path& file);

@@ -30,6 +30,12 @@ class CpuEngine : public StepEngine {
   StepSums commit() override;
   Index internal_forces(std::span<const double> u, std::span<double> f) override;
 
+ protected:
+  // f = f_int(u) over every node, for both calls above: the model's force kernel here; an engine that shares the
+  // integration points between processes computes its own and completes f with the others' contributions.
+  virtual Index forces(std::span<const double> u, std::span<double> f);
+  const Model& model() const { return *model_; }
+
  private:
   // One share's part of the step's sums, and the energy of its fastest node.
   struct Partial {
@@ -45,7 +51,7 @@ class CpuEngine : public StepEngine {
   std::vector<double> u_, u_previous_, prediction_, free_, f_, f_previous_, mass_;
   std::vector<std::int64_t> first_bad_;  // per share: the first non-finite unknown of the prediction
   std::vector<Partial> partial_;
-  long evaluations_ = 0;  // of the step's forces (evaluate_forces), and their time
+  long evaluations_ = 0;  // of the forces (the step's and the monitors' extra ones), and their time
   double kernel_s_ = 0.0;
 };
 

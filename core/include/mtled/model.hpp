@@ -46,6 +46,10 @@ class Model {
     int threads = 0;
     // The precision of the kernel's gradient rows (RowPrecision).
     RowPrecision precision = RowPrecision::double_precision;
+    // Per tet, the group its integration points belong to (empty: one group). The points are numbered group by
+    // group (tet order within a group), so that each group's points are one contiguous range: a distributed step
+    // engine gives each process one group (StepEngine::cell_groups).
+    std::vector<int> cell_groups;
   };
 
   // `region_materials[r]` fills mesh region r.
@@ -92,11 +96,21 @@ class Model {
     return {xi[0] - mean[0], xi[1] - mean[1], xi[2] - mean[2]};
   }
 
+  // The integration points of cell group g (Options::cell_groups): [first, second).
+  std::pair<Index, Index> group_points(int group) const {
+    return {group_offsets_[static_cast<std::size_t>(group)], group_offsets_[static_cast<std::size_t>(group) + 1]};
+  }
+  int group_count() const { return static_cast<int>(group_offsets_.size()) - 1; }
+
   // Internal nodal forces f_I = sum_ip w F S (grad N_I + gradient_correction(ip, I)) for nodal parameters u (3
   // per node), or the volumetric treatment's. Returns -1, or the lowest-numbered integration point whose F is
   // inadmissible (J <= 0 or not finite); f is then incomplete. Parallel over integration points (the model's
   // ThreadTeam); not re-entrant.
   Index internal_forces(std::span<const double> u, std::span<double> f) const;
+  // The same sum over the integration points [points.first, points.second) only (every node of f is written; the
+  // nodes no point of the range supports get zero). Not with a volumetric treatment, whose averages need every
+  // point.
+  Index internal_forces(std::span<const double> u, std::span<double> f, std::pair<Index, Index> points) const;
   double strain_energy(std::span<const double> u) const;
   // The fewest bytes one internal_forces() call must move through memory: the rows once (padding included; the
   // scatter re-reads them from the cache), each point's weight, mean correction and material, the per-node
@@ -121,7 +135,7 @@ class Model {
   bool shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values) const;
 
  private:
-  void build_integration_points(int points_per_tet);
+  void build_integration_points(int points_per_tet, const std::vector<int>& cell_groups);
   void build_supports(RowPrecision precision);
   void build_time_steps();
   void build_integration_correction();
@@ -149,6 +163,7 @@ class Model {
   double length_scale_ = 0.0;
   std::unique_ptr<PointSearch> node_search_;
 
+  std::vector<Index> group_offsets_;  // first integration point of each cell group, then the point count
   std::vector<Vec3> ip_position_;
   std::vector<double> ip_weight_;
   std::vector<Index> ip_tet_;

@@ -79,7 +79,7 @@ class Simulation final : public DiscreteSystem, private StepControl {
 
  private:
   void build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
-                   std::vector<std::shared_ptr<const Material>> materials);
+                   std::vector<std::shared_ptr<const Material>> materials, std::vector<int> cell_groups);
   void build_drivers(const Scene& scene, PluginCatalog& catalog);
   void update_drivers();
   // The step's end up to the new state: the load state moves on, the drivers update, the constraints correct the

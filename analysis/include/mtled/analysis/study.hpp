@@ -87,6 +87,7 @@ struct Settings {
   int threads = 0;  // 0: the study file's "threads", else the run's default
   bool reuse = false;
   std::string log_level = "info";
+  bool gather = false;  // run nothing: read every run from its folder (runs a batch scheduler made)
 };
 
 // ---- plan
@@ -97,15 +98,33 @@ Study read(const std::filesystem::path& file);
 void check_scenes(Study& study, const std::vector<std::filesystem::path>& plugin_paths);
 
 // ---- runs
+// How a run's process ended (what its folder alone cannot tell: a signal, the study's timeout, its memory).
+struct RunOutcome {
+  bool reused = false;  // an earlier successful run kept (--reuse); nothing ran
+  int exit_code = -1;
+  int signal = 0;
+  bool timed_out = false;
+  double elapsed_s = 0.0;
+  double max_rss_mb = 0.0;
+};
+
 class Runner {
  public:
   Runner(const Study& study, const Settings& settings, const std::filesystem::path& output);
-  // Runs one configuration (or, with reuse, keeps its earlier successful run) and reads its summary.
+  // Runs one configuration (or, with reuse, keeps its earlier successful run) and reads its summary: execute, then
+  // record. A study spread over processes executes on each and records on one.
   Row run(const Configuration& configuration, const std::string& counter);
+  RunOutcome execute(const Configuration& configuration, const std::string& counter);
+  Row record(const Configuration& configuration, const RunOutcome& outcome) const;
+  // The configuration's run as one shell command line (a batch scheduler's job; its log in the run's folder).
+  std::string command_line(const Configuration& configuration) const;
+  // The outcome of a run a scheduler made, read from its folder's summary.json (no summary: failed).
+  RunOutcome outcome_from_folder(const Configuration& configuration) const;
   std::filesystem::path folder(const Configuration& configuration) const { return runs_ / configuration.folder; }
 
  private:
   Row reused(const Configuration& configuration, const std::string& counter) const;
+  std::vector<std::string> arguments(const Configuration& configuration) const;
 
   const Study& study_;
   const Settings& settings_;

@@ -18,12 +18,16 @@ namespace mtled {
 
 class Model;
 struct ConstraintBlock;
+struct TetMesh;
 
 class StepEngine {
  public:
   static constexpr Category category = Category::backend;
   virtual ~StepEngine();
 
+  // Asked before the model is built: per tet, the group its integration points go in (Model::Options::cell_groups),
+  // for an engine that splits the points between processes; empty (the default): one group.
+  virtual std::vector<int> cell_groups(const TetMesh& mesh);
   // Takes the model's precomputed data (rows, weights, materials, threads). Throws InputError when it cannot run
   // this model, saying what it lacks and how to run on the CPU instead.
   virtual void setup(const Model& model) = 0;

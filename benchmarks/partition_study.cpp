@@ -1,0 +1,115 @@
+// The partition of a scene's cloud into 2 to 512 parts as the mpi backend makes it (METIS on the tets' dual
+// graph), and a strong-scaling projection from those sizes and a one-rank run's measured costs.
+//
+//   build/bin/mtled_partition_study SCENE RUN_FOLDER [PARTS...] [--latency-us 2] [--bandwidth-GBs 10]
+//
+// RUN_FOLDER: a one-process run of the same scene (its summary.json: the force kernel's time per evaluation, the
+// steps and evaluations, the solve time). Prints one row per part count: integration points per part (the largest
+// over the mean: the imbalance), ghost nodes per part (mean and largest), neighbours, the bytes a rank sends and
+// receives per force evaluation (halo: 24 per ghost node; gather: 24 per node it does not own), and the projected
+// time per step on that many ranks of the run's threads (the model: docs/mpi.md).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <cstdlib>
+#include <iostream>
+#include <numeric>
+#include <string>
+
+#include "mesh_partition.hpp"
+#include "mtled/analysis/scene_sections.hpp"
+#include "mtled/json.hpp"
+#include "mtled/plugin_catalog.hpp"
+#include "mtled/scene.hpp"
+#include "mtled/simulation.hpp"
+
+namespace {
+
+struct Costs {
+  double kernel_s = 0.0;            // one force evaluation on one rank
+  double rest_per_step_s = 0.0;     // the step's other work, which every rank repeats
+  double evaluations_per_step = 1.0;
+};
+
+Costs measured_costs(const std::filesystem::path& run) {
+  std::ifstream in(run / "summary.json");
+  if (!in) throw std::runtime_error("cannot read " + (run / "summary.json").string());
+  const mtled::json s = mtled::json::parse(in);
+  Costs c;
+  const double steps = s.at("steps").get<double>(), evaluations = s.at("backend").at("force_evaluations").get<double>();
+  c.kernel_s = s.at("backend").at("force_kernel_s").get<double>();
+  c.evaluations_per_step = evaluations / steps;
+  c.rest_per_step_s = (s.at("solve_time_s").get<double>() - c.kernel_s * evaluations) / steps;
+  return c;
+}
+
+}  // namespace
+
+int study(int argc, char** argv);
+
+int main(int argc, char** argv) {
+  try {
+    return study(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "mtled_partition_study: " << e.what() << "\n";
+    return 2;
+  }
+}
+
+int study(int argc, char** argv) {
+  using namespace mtled;
+  std::vector<std::string> args(argv + 1, argv + argc);
+  double latency_s = 2e-6, bandwidth = 10e9;
+  std::vector<int> parts;
+  std::vector<std::string> positional;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    if (args[i] == "--latency-us" && i + 1 < args.size()) latency_s = std::stod(args[++i]) * 1e-6;
+    else if (args[i] == "--bandwidth-GBs" && i + 1 < args.size()) bandwidth = std::stod(args[++i]) * 1e9;
+    else if (positional.size() < 2) positional.push_back(args[i]);
+    else parts.push_back(std::stoi(args[i]));
+  }
+  if (positional.size() < 2) {
+    std::cerr << "usage: mtled_partition_study SCENE RUN_FOLDER [PARTS...] [--latency-us 2] [--bandwidth-GBs 10]\n";
+    return 2;
+  }
+  if (parts.empty()) parts = {2, 4, 8, 16, 32, 64, 128, 256, 512};
+  const Costs costs = measured_costs(positional[1]);
+
+  SceneDocument document = read_scene(positional[0]);
+  PluginCatalog catalog(plugin_search_path({}, scene_plugin_paths(document)));
+  const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
+  const Simulation simulation(scene, catalog);
+  const Model& model = simulation.model();
+  const auto nodes = static_cast<double>(model.node_count());
+  fmt::print("{}: {} nodes, {} integration points; one rank: force kernel {:.3f} ms per evaluation, {:.2f} "
+             "evaluations per step, the rest {:.3f} ms per step; network assumed {:.1f} us, {:.1f} GB/s\n",
+             positional[0], model.node_count(), model.integration_point_count(), costs.kernel_s * 1e3,
+             costs.evaluations_per_step, costs.rest_per_step_s * 1e3, latency_s * 1e6, bandwidth / 1e9);
+  fmt::print("| parts | imbalance | ghost nodes per part (mean / largest) | neighbours (largest) | halo KB sent per "
+             "evaluation (largest rank) | gather KB received per evaluation | projected ms per step | speed-up |\n");
+  fmt::print("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  const double one_rank = costs.evaluations_per_step * costs.kernel_s + costs.rest_per_step_s;
+  for (const int n : parts) {
+    const MeshPartition partition = partition_mesh(model.mesh(), n);
+    std::vector<int> point_part(static_cast<std::size_t>(model.integration_point_count()));
+    for (std::size_t p = 0; p < point_part.size(); ++p) point_part[p] = partition.tet_part[static_cast<std::size_t>(model.ip_tets()[p])];
+    const PartSizes sizes = part_sizes(partition, point_part, model.ip_supports());
+    const double mean_points = static_cast<double>(model.integration_point_count()) / n;
+    const double imbalance = static_cast<double>(*std::max_element(sizes.points.begin(), sizes.points.end())) / mean_points;
+    const double mean_ghosts = static_cast<double>(std::accumulate(sizes.ghost_nodes.begin(), sizes.ghost_nodes.end(), std::int64_t{0})) / n;
+    const auto most_ghosts = static_cast<double>(*std::max_element(sizes.ghost_nodes.begin(), sizes.ghost_nodes.end()));
+    const int neighbours = *std::max_element(sizes.neighbours.begin(), sizes.neighbours.end());
+    const auto fewest_owned = static_cast<double>(*std::min_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
+    const double halo_bytes = 24.0 * most_ghosts, gather_bytes = 24.0 * (nodes - fewest_owned);
+    // Per evaluation: the slowest rank's share of the kernel; its messages (one per neighbour, a gather of log2 n
+    // rounds, one reduction); the halo it sends and the whole vector it gathers over the link.
+    const double messages = neighbours + 2.0 * std::ceil(std::log2(n));
+    const double exchange = messages * latency_s + (halo_bytes + gather_bytes) / bandwidth;
+    const double step = costs.evaluations_per_step * (costs.kernel_s * imbalance / n + exchange) + costs.rest_per_step_s;
+    fmt::print("| {} | {:.3f} | {:.0f} / {:.0f} | {} | {:.1f} | {:.0f} | {:.3f} | {:.1f}x |\n", n, imbalance, mean_ghosts,
+               most_ghosts, neighbours, halo_bytes / 1e3, gather_bytes / 1e3, step * 1e3, one_rank / step);
+  }
+  return 0;
+}

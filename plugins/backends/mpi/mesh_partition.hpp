@@ -1,0 +1,30 @@
+#pragma once
+// The partition of a scene's cloud between ranks: METIS splits the background tets (the dual graph, tets adjacent
+// when they share a face) into parts of equal tet counts with the fewest cut faces, and gives each node a part. The
+// mpi backend and the partition study (benchmarks/partition_study.cpp) share it.
+#include <span>
+#include <vector>
+
+#include "mtled/mesh.hpp"
+#include "mtled/gradient_rows.hpp"
+
+namespace mtled {
+
+struct MeshPartition {
+  std::vector<int> tet_part;   // per tet
+  std::vector<int> node_part;  // per node: the part that sums its force
+};
+
+// Throws std::runtime_error when METIS fails. One part: every tet and node in part 0.
+MeshPartition partition_mesh(const TetMesh& mesh, int parts);
+
+// Per part: its integration points, its ghost nodes (nodes its points' supports reach that another part owns), the
+// nodes it owns, and its neighbours (the parts owning its ghost nodes).
+struct PartSizes {
+  std::vector<std::int64_t> points, ghost_nodes, owned_nodes;
+  std::vector<int> neighbours;
+};
+// `point_part[p]`: the part of integration point p; `rows`: the points' supports.
+PartSizes part_sizes(const MeshPartition& partition, std::span<const int> point_part, const GradientRows& rows);
+
+}  // namespace mtled

@@ -1,0 +1,235 @@
+// `mpi`: one scene on the processes of an MPI run (mpirun -np N mtled run SCENE; the command line selects this
+// backend when it runs on more than one rank). The background cells are partitioned by METIS (the tets' dual graph,
+// faces shared); each rank computes the internal forces of its cells' integration points on its threads, sends its
+// contributions to the nodes other ranks own, sums those it receives for its own nodes in rank order, and every rank
+// then gathers the complete force vector. The rest of the step (the update, the needle, the constraint projection,
+// the monitors) runs on every rank on the same complete state, so the ranks agree bitwise on every verdict and only
+// rank 0 writes. docs/mpi.md gives the design, its costs and what it does not distribute yet.
+#include <mpi.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+#include "mesh_partition.hpp"
+#include "mtled/cpu_engine.hpp"
+#include "mtled/errors.hpp"
+#include "mtled/log.hpp"
+#include "mtled/model.hpp"
+#include "mtled/plugin.hpp"
+
+namespace mtled {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Every rank's value of a per-rank count, on every rank.
+std::vector<std::int64_t> all_ranks(std::int64_t value, int ranks) {
+  std::vector<std::int64_t> out(static_cast<std::size_t>(ranks));
+  MPI_Allgather(&value, 1, MPI_INT64_T, out.data(), 1, MPI_INT64_T, MPI_COMM_WORLD);
+  return out;
+}
+
+}  // namespace
+
+class MpiBackend final : public CpuEngine {
+ public:
+  static void declare(ComponentDeclaration& d) {
+    d.summary(
+        "The processes of an MPI run (mpirun -np N mtled run SCENE, chosen by the command line on more than one "
+        "rank): METIS partitions the background cells, each rank computes its cells' integration points on its "
+        "threads (--threads per rank) and the ranks exchange their contributions to each other's nodes every force "
+        "evaluation; the rest of the step runs on every rank on the same state, and rank 0 writes the outputs.");
+  }
+  explicit MpiBackend(const Parameters& parameters) {
+    int started = 0;
+    MPI_Initialized(&started);
+    if (!started)
+      throw InputError(parameters.pointer("type"),
+                       "the mpi backend runs under an MPI launcher: mpirun -np N mtled run SCENE (it is chosen there "
+                       "without this block); to run on one process, leave out /backend");
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &ranks_);
+  }
+
+  std::vector<int> cell_groups(const TetMesh& mesh) override {
+    // Rank 0 partitions and tells the others, so every rank holds the same partition whatever METIS does.
+    MeshPartition partition = rank_ == 0 ? partition_mesh(mesh, ranks_) : MeshPartition{};
+    std::vector<int>& tet_part = partition.tet_part;
+    tet_part.resize(mesh.tets.size());
+    owner_ = std::move(partition.node_part);
+    owner_.resize(static_cast<std::size_t>(mesh.node_count()));
+    MPI_Bcast(tet_part.data(), static_cast<int>(tet_part.size()), MPI_INT, 0, MPI_COMM_WORLD);
+    MPI_Bcast(owner_.data(), static_cast<int>(owner_.size()), MPI_INT, 0, MPI_COMM_WORLD);
+    return std::move(tet_part);
+  }
+
+  void setup(const Model& model) override {
+    CpuEngine::setup(model);
+    // A volumetric treatment's averages need F at the points around each node, which the treatment interface
+    // computes over every point: each rank then computes the whole force itself (the same answer, no speed-up).
+    whole_on_every_rank_ = model.volumetric_treatment() != nullptr;
+    if (whole_on_every_rank_ && rank_ == 0)
+      log().warn("mpi: the volumetric treatment's forces are computed whole on every rank (not divided between "
+                 "the {} ranks)", ranks_);
+    const Index n_points = model.integration_point_count();
+    points_ = rank_ < model.group_count() ? model.group_points(rank_) : std::pair<Index, Index>{n_points, n_points};
+    build_exchange(model);
+    record_partition(model);
+  }
+
+  json describe() const override {
+    json out = CpuEngine::describe();
+    out["type"] = "mpi";
+    out["ranks"] = ranks_;
+    out["threads_per_rank"] = out["threads"];
+    out.erase("threads");
+    out["partition"] = partition_;
+    if (whole_on_every_rank_) out["forces"] = "whole on every rank (volumetric treatment)";
+    out["exchange_s"] = exchange_s_;  // rank 0's: sends, receives, its sums and the gather
+    return out;
+  }
+
+ protected:
+  Index forces(std::span<const double> u, std::span<double> f) override {
+    if (whole_on_every_rank_) return model().internal_forces(u, f);
+    const Index bad = model().internal_forces(u, f, points_);
+    const auto start = Clock::now();
+    exchange(f);
+    std::int64_t first_bad = bad < 0 ? std::numeric_limits<std::int64_t>::max() : bad;
+    MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
+    exchange_s_ += std::chrono::duration<double>(Clock::now() - start).count();
+    return first_bad == std::numeric_limits<std::int64_t>::max() ? -1 : static_cast<Index>(first_bad);
+  }
+
+ private:
+  // The lists each force evaluation uses: the nodes this rank's points support that other ranks own (sent), the
+  // nodes it owns that other ranks' points support (received, in the sender's order), and every rank's owned nodes
+  // in the gathered vector's order.
+  void build_exchange(const Model& model) {
+    const GradientRows& rows = model.ip_supports();
+    const std::size_t nodes = static_cast<std::size_t>(model.node_count());
+    std::vector<char> supported(nodes, 0);
+    for (Index p = points_.first; p < points_.second; ++p)
+      for (int k = 0; k < rows.size(p); ++k) supported[static_cast<std::size_t>(rows.node(p, k))] = 1;
+    send_nodes_.assign(static_cast<std::size_t>(ranks_), {});
+    for (std::size_t i = 0; i < nodes; ++i)
+      if (supported[i] && owner_[i] != rank_) send_nodes_[static_cast<std::size_t>(owner_[i])].push_back(static_cast<Index>(i));
+    std::vector<int> send_counts(static_cast<std::size_t>(ranks_)), receive_counts(static_cast<std::size_t>(ranks_));
+    for (int q = 0; q < ranks_; ++q) send_counts[static_cast<std::size_t>(q)] = static_cast<int>(send_nodes_[static_cast<std::size_t>(q)].size());
+    MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    std::vector<int> send_offsets(static_cast<std::size_t>(ranks_) + 1, 0), receive_offsets(static_cast<std::size_t>(ranks_) + 1, 0);
+    std::partial_sum(send_counts.begin(), send_counts.end(), send_offsets.begin() + 1);
+    std::partial_sum(receive_counts.begin(), receive_counts.end(), receive_offsets.begin() + 1);
+    std::vector<std::int64_t> sent, received(static_cast<std::size_t>(receive_offsets.back()));
+    for (const auto& list : send_nodes_) sent.insert(sent.end(), list.begin(), list.end());
+    MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_INT64_T, received.data(),
+                  receive_counts.data(), receive_offsets.data(), MPI_INT64_T, MPI_COMM_WORLD);
+    receive_nodes_.assign(static_cast<std::size_t>(ranks_), {});
+    for (int q = 0; q < ranks_; ++q)
+      receive_nodes_[static_cast<std::size_t>(q)].assign(received.begin() + receive_offsets[static_cast<std::size_t>(q)],
+                                                          received.begin() + receive_offsets[static_cast<std::size_t>(q) + 1]);
+    // The gathered vector: rank 0's owned nodes in ascending order, then rank 1's, ...
+    gather_counts_.assign(static_cast<std::size_t>(ranks_), 0);
+    for (const int o : owner_) gather_counts_[static_cast<std::size_t>(o)] += 3;
+    gather_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
+    std::partial_sum(gather_counts_.begin(), gather_counts_.end() - 1, gather_offsets_.begin() + 1);
+    gather_order_.clear();
+    for (int q = 0; q < ranks_; ++q)
+      for (std::size_t i = 0; i < nodes; ++i)
+        if (owner_[i] == q) gather_order_.push_back(static_cast<Index>(i));
+    const auto mine = static_cast<std::size_t>(gather_offsets_[static_cast<std::size_t>(rank_)] / 3);
+    owned_.assign(gather_order_.begin() + static_cast<std::ptrdiff_t>(mine),
+                  gather_order_.begin() + static_cast<std::ptrdiff_t>(mine) + gather_counts_[static_cast<std::size_t>(rank_)] / 3);
+    slot_.assign(nodes, -1);
+    for (std::size_t k = 0; k < owned_.size(); ++k) slot_[static_cast<std::size_t>(owned_[k])] = static_cast<Index>(k);
+    send_buffer_.resize(static_cast<std::size_t>(ranks_));
+    receive_buffer_.resize(static_cast<std::size_t>(ranks_));
+    for (int q = 0; q < ranks_; ++q) {
+      send_buffer_[static_cast<std::size_t>(q)].resize(3 * send_nodes_[static_cast<std::size_t>(q)].size());
+      receive_buffer_[static_cast<std::size_t>(q)].resize(3 * receive_nodes_[static_cast<std::size_t>(q)].size());
+    }
+    owned_sum_.resize(3 * owned_.size());
+    gathered_.resize(3 * nodes);
+  }
+
+  // f holds this rank's contributions; afterwards every rank's sum, the same bits on every rank.
+  void exchange(std::span<double> f) {
+    std::vector<MPI_Request> requests;
+    for (int q = 0; q < ranks_; ++q) {
+      auto& in = receive_buffer_[static_cast<std::size_t>(q)];
+      if (!in.empty()) {
+        requests.emplace_back();
+        MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, q, 0, MPI_COMM_WORLD, &requests.back());
+      }
+    }
+    for (int q = 0; q < ranks_; ++q) {
+      const auto& list = send_nodes_[static_cast<std::size_t>(q)];
+      auto& out = send_buffer_[static_cast<std::size_t>(q)];
+      if (list.empty()) continue;
+      for (std::size_t k = 0; k < list.size(); ++k)
+        for (std::size_t c = 0; c < 3; ++c) out[3 * k + c] = f[3 * static_cast<std::size_t>(list[k]) + c];
+      requests.emplace_back();
+      MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, q, 0, MPI_COMM_WORLD, &requests.back());
+    }
+    MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+    // Each owned node's sum in rank order, whatever order the messages came in: the same answer on every repeat.
+    std::fill(owned_sum_.begin(), owned_sum_.end(), 0.0);
+    for (int q = 0; q < ranks_; ++q) {
+      if (q == rank_) {
+        for (std::size_t k = 0; k < owned_.size(); ++k)
+          for (std::size_t c = 0; c < 3; ++c) owned_sum_[3 * k + c] += f[3 * static_cast<std::size_t>(owned_[k]) + c];
+        continue;
+      }
+      const auto& list = receive_nodes_[static_cast<std::size_t>(q)];
+      const auto& in = receive_buffer_[static_cast<std::size_t>(q)];
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        const auto s = static_cast<std::size_t>(slot_[static_cast<std::size_t>(list[k])]);
+        for (std::size_t c = 0; c < 3; ++c) owned_sum_[3 * s + c] += in[3 * k + c];
+      }
+    }
+    MPI_Allgatherv(owned_sum_.data(), static_cast<int>(owned_sum_.size()), MPI_DOUBLE, gathered_.data(),
+                   gather_counts_.data(), gather_offsets_.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    for (std::size_t k = 0; k < gather_order_.size(); ++k)
+      for (std::size_t c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(gather_order_[k]) + c] = gathered_[3 * k + c];
+  }
+
+  // summary.json's "partition": points, owned and ghost nodes per rank, the imbalance, the bytes exchanged.
+  void record_partition(const Model& model) {
+    std::int64_t ghosts = 0;
+    for (const auto& list : send_nodes_) ghosts += static_cast<std::int64_t>(list.size());
+    const auto points = all_ranks(points_.second - points_.first, ranks_);
+    const auto ghost_nodes = all_ranks(ghosts, ranks_);
+    const auto owned = all_ranks(static_cast<std::int64_t>(owned_.size()), ranks_);
+    const double mean = static_cast<double>(model.integration_point_count()) / ranks_;
+    const std::int64_t most = *std::max_element(points.begin(), points.end());
+    const std::int64_t sent = std::accumulate(ghost_nodes.begin(), ghost_nodes.end(), std::int64_t{0});
+    partition_ = {{"method", "METIS_PartMeshDual (tets sharing a face)"},
+                  {"integration_points", points},
+                  {"owned_nodes", owned},
+                  {"ghost_nodes", ghost_nodes},
+                  {"imbalance", mean > 0.0 ? static_cast<double>(most) / mean : 1.0},
+                  {"halo_bytes_per_evaluation", 24 * sent},
+                  {"gather_bytes_per_evaluation", 24 * model.node_count() * (ranks_ - 1)}};
+  }
+
+  int rank_ = 0, ranks_ = 1;
+  std::pair<Index, Index> points_{0, 0};
+  std::vector<int> owner_;  // per node: the rank that sums its force
+  std::vector<std::vector<Index>> send_nodes_, receive_nodes_;
+  std::vector<std::vector<double>> send_buffer_, receive_buffer_;
+  std::vector<Index> owned_, slot_, gather_order_;
+  std::vector<int> gather_counts_, gather_offsets_;
+  std::vector<double> owned_sum_, gathered_;
+  json partition_;
+  bool whole_on_every_rank_ = false;
+  double exchange_s_ = 0.0;
+};
+
+}  // namespace mtled
+
+MTLED_PLUGIN(mtled::StepEngine, mtled::MpiBackend)

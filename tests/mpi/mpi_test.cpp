@@ -1,0 +1,181 @@
+// One scene on several MPI ranks (the mpi backend, docs/mpi.md) against the same scene on one process: the same step
+// count and the same displacements up to the order of the force sums (NRMSE <= 1e-12), the same bits on a repeat,
+// and a failing rank that ends the whole run; a study whose runs are spread over ranks gives the serial study's
+// report. Run through mpirun (label mpi; skipped where mpirun is missing).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <algorithm>
+#include <filesystem>
+#include <sstream>
+
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace mtled {
+namespace {
+
+// Open MPI refuses root unless told; CI runs as root in a container.
+const std::vector<std::string> kEnvironment = {"OMPI_ALLOW_RUN_AS_ROOT=1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1",
+                                               "OMPI_MCA_rmaps_base_oversubscribe=1"};
+
+// A hang would stall CI: every multi-rank run is killed after a minute.
+std::vector<std::string> launcher(int ranks) {
+  return {"timeout", "-s", "KILL", "60", "mpirun", "-np", std::to_string(ranks)};
+}
+
+bool have_mpirun() { return std::system("command -v mpirun > /dev/null 2>&1") == 0; }
+
+fs::path folder(const std::string& name) {
+  const fs::path dir = fs::path(MTLED_TEST_BINARY_DIR) / "test_output" / "mpi" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir.parent_path());
+  return dir;
+}
+
+// The gel cylinder with the kinematic needle to 5 mm: captures and the shaft's constraints cross the partition.
+fs::path needle_scene(const std::string& name) {
+  const json needle = {{"type", "kinematic"}, {"diameter", 1.6e-3}, {"entry", {0.0, 0.0, 8e-3}},
+                       {"direction", {0, 0, -1}}, {"depth", 5e-3}, {"deformation_coefficient", 0.4}};
+  // One file per test: ctest runs tests side by side.
+  const fs::path file = fs::path(MTLED_TEST_BINARY_DIR) / "test_output" / "mpi" / (name + ".json");
+  test::write_text(file, test::gel_cylinder_scene(8e-3, needle).dump(2));
+  return file;
+}
+fs::path cube_scene() { return fs::path(MTLED_TEST_SOURCE_DIR) / "tests/scenes/data/small_cube.json"; }
+
+test::CommandResult run(const fs::path& scene, const fs::path& out, int ranks,
+                        const std::vector<std::string>& environment = {}) {
+  std::vector<std::string> arguments = {"run", scene.string(), "-o", out.string(), "--threads", "1", "--no-progress"};
+  std::vector<std::string> env = kEnvironment;
+  env.insert(env.end(), environment.begin(), environment.end());
+  return test::run_mtled(arguments, env, ranks > 0 ? launcher(ranks) : std::vector<std::string>{});
+}
+
+double largest_nrmse(const fs::path& a, const fs::path& b) {
+  const auto compared = test::run_mtled({"compare", a.string(), b.string(), "--json"});
+  EXPECT_EQ(compared.exit_code, 0) << compared.output;
+  const json nrmse = json::parse(compared.output)["nrmse"];
+  return std::max({nrmse["ux"].get<double>(), nrmse["uy"].get<double>(), nrmse["uz"].get<double>()});
+}
+
+class MpiRun : public ::testing::TestWithParam<int> {
+ protected:
+  void SetUp() override {
+    if (!have_mpirun()) GTEST_SKIP() << "mpirun is not installed";
+  }
+};
+
+// The bound: the ranks only change the order in which each node's force contributions are added (round-off,
+// 1e-16 relative per sum), which the dynamic relaxation's 300 to 3,000 steps carry to about 1e-13 at most.
+TEST_P(MpiRun, TheNeedleInsertionIsTheOneProcessAnswer) {
+  const int ranks = GetParam();
+  const std::string name = "needle_on_" + std::to_string(ranks);
+  const fs::path scene = needle_scene(name);
+  const fs::path one = folder(name + "_serial"), several = folder(name);
+  const auto serial = run(scene, one, 0);
+  ASSERT_EQ(serial.exit_code, 0) << serial.output;
+  const auto parallel = run(scene, several, ranks);
+  ASSERT_EQ(parallel.exit_code, 0) << parallel.output;
+  const json a = test::read_json(one / "summary.json"), b = test::read_json(several / "summary.json");
+  EXPECT_EQ(b["backend"]["type"], "mpi");
+  EXPECT_EQ(b["backend"]["ranks"], ranks);
+  EXPECT_EQ(b["backend"]["partition"]["integration_points"].size(), static_cast<std::size_t>(ranks));
+  EXPECT_EQ(a["steps"], b["steps"]);
+  const double fa = a["needle"]["final_force_N"], fb = b["needle"]["final_force_N"];
+  EXPECT_GT(fa, 0.0);
+  EXPECT_NEAR(fb, fa, 1e-12 * fa);
+  EXPECT_LE(largest_nrmse(several, one), 1e-12);
+}
+
+TEST_P(MpiRun, TheCubeIsTheOneProcessAnswerAndTheSameOnARepeat) {
+  const int ranks = GetParam();
+  const std::string name = "cube_on_" + std::to_string(ranks);
+  const fs::path one = folder(name + "_serial"), several = folder(name), again = folder(name + "_again");
+  ASSERT_EQ(run(cube_scene(), one, 0).exit_code, 0);
+  const auto first = run(cube_scene(), several, ranks);
+  ASSERT_EQ(first.exit_code, 0) << first.output;
+  ASSERT_EQ(run(cube_scene(), again, ranks).exit_code, 0);
+  EXPECT_EQ(test::read_json(one / "summary.json")["steps"], test::read_json(several / "summary.json")["steps"]);
+  EXPECT_LE(largest_nrmse(several, one), 1e-12);
+  // Each node's contributions are added in rank order whatever order the messages arrive in.
+  EXPECT_EQ(test::read_text(several / "result.vtu"), test::read_text(again / "result.vtu"));
+  EXPECT_EQ(test::read_text(several / "reactions.csv"), test::read_text(again / "reactions.csv"));
+}
+
+INSTANTIATE_TEST_SUITE_P(Ranks, MpiRun, ::testing::Values(2, 3));
+
+TEST(MpiFailure, OneFailingRankEndsTheRunWithAnErrorNotAHang) {
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun is not installed";
+  const fs::path out = folder("failure");
+  const auto result = run(needle_scene("needle_failure"), out, 2, {"MTLED_TEST_FAIL_RANK=1:20"});
+  EXPECT_NE(result.exit_code, 0) << result.output;
+  EXPECT_NE(result.exit_code, 137) << "killed by the test's timeout: the ranks hung\n" << result.output;
+  EXPECT_NE(result.output.find("rank 1 of 2: failure injected at step 20"), std::string::npos) << result.output;
+  EXPECT_FALSE(fs::exists(out / "result.vtu"));
+}
+
+TEST(MpiBackend, NamedWithoutALauncherItSaysHowToRunIt) {
+  const fs::path out = folder("no_launcher");
+  const auto result = test::run_mtled({"run", cube_scene().string(), "-o", out.string(), "--backend", "mpi"});
+  if (result.output.find("not built") != std::string::npos) GTEST_SKIP() << "the mpi backend is not built";
+  EXPECT_EQ(result.exit_code, 2) << result.output;
+  EXPECT_NE(result.output.find("mpirun -np N mtled run"), std::string::npos) << result.output;
+}
+
+TEST(MpiBackend, AnotherBackendOnSeveralRanksIsRefused) {
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun is not installed";
+  const fs::path out = folder("other_backend");
+  const auto result = test::run_mtled({"run", cube_scene().string(), "-o", out.string(), "--backend", "cpu"},
+                                      kEnvironment, launcher(2));
+  EXPECT_EQ(result.exit_code, 2) << result.output;
+  EXPECT_NE(result.output.find("the cpu backend runs on one process, and this run has 2 ranks"), std::string::npos)
+      << result.output;
+}
+
+// study.csv's columns that do not depend on when or where a run ran.
+std::vector<std::string> measured_rows(const fs::path& csv) {
+  std::istringstream in(test::read_text(csv));
+  std::string line;
+  std::vector<std::vector<std::string>> rows;
+  while (std::getline(in, line)) {
+    std::vector<std::string> fields;
+    std::istringstream cells(line);
+    std::string field;
+    while (std::getline(cells, field, ',')) fields.push_back(field);
+    rows.push_back(fields);
+  }
+  std::vector<std::string> out;
+  for (const auto& row : rows) {
+    std::string kept;
+    for (const char* name : {"label", "status", "exit_code", "steps", "error"}) {
+      const auto at = std::find(rows[0].begin(), rows[0].end(), name) - rows[0].begin();
+      kept += row.at(static_cast<std::size_t>(at)) + ";";
+    }
+    out.push_back(kept);
+  }
+  return out;
+}
+
+TEST(MpiStudy, RunsSpreadOverRanksGiveTheSerialReport) {
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun is not installed";
+  const fs::path dir = folder("study");
+  const json study = {{"scene", cube_scene().string()},
+                      {"threads", 1},
+                      {"metric", "nrmse"},
+                      {"reference", {{"label", "dense"}, {"set", {{"/mesh/target_nodes", 500}}}}},
+                      {"sweep", {{"/mesh/target_nodes", {200, 250, 300}}}}};
+  test::write_text(dir / "study.json", study.dump(2));
+  const auto serial = test::run_mtled({"study", (dir / "study.json").string(), "-o", (dir / "serial").string()});
+  ASSERT_EQ(serial.exit_code, 0) << serial.output;
+  const auto spread = test::run_mtled({"study", (dir / "study.json").string(), "-o", (dir / "ranks").string()},
+                                      kEnvironment, launcher(2));
+  ASSERT_EQ(spread.exit_code, 0) << spread.output;
+  EXPECT_EQ(measured_rows(dir / "ranks" / "study.csv"), measured_rows(dir / "serial" / "study.csv"));
+  // Each run ran alone on one process (the launcher's variables kept from the children): no "mpi" backend.
+  EXPECT_EQ(test::read_json(dir / "ranks" / "runs" / "target_nodes=250" / "summary.json")["backend"]["type"], "cpu");
+}
+
+}  // namespace
+}  // namespace mtled
