@@ -209,11 +209,12 @@ Generation calibrated_generation(Generator& generator, const Parameters& paramet
                                  "ask for at least {:.0f} nodes",
                                  target, request.component, request.max_mesh_size->what, coarsest,
                                  std::ceil(model_node_count(measure, coarsest))));
-  double k = 1.0;
-  if (target >= kPilotThreshold) {
+  double k = request.node_factor.value_or(1.0);
+  if (target >= kPilotThreshold && !request.node_factor) {
     const double h = std::min(size_for_node_count(measure, kPilotFraction * goal, k), coarsest);
     const Generation pilot = generator.generate(h);
     k = pilot.nodes / model_node_count(measure, h);
+    log().debug("{}: the pilot's node-model factor k = {:.17g}", request.component, k);
   }
   std::optional<Generation> best;
   auto error = [&](const Generation& g) { return std::abs(g.nodes / goal - 1.0); };

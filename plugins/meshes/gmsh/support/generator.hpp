@@ -41,13 +41,17 @@ struct GeneratorRequest {
   // Where a failure is reported (InputError's `where`): the block's pointer unless a file is to blame.
   std::optional<std::string> failure_where;
   std::string failure_advice = "check the dimensions, or try another target_nodes or mesh_size";
+  // The node-count model's factor k for this shape, measured once on a pilot of its default cloud: given, the
+  // calibration starts from it instead of generating a pilot (one generation for the default target_nodes).
+  std::optional<double> node_factor;
 };
 
 // Generates the mesh under a GmshSession. With "mesh_size" given, one generation at that size; otherwise
 // the size is calibrated with the node-count model N(h) = k (c_v V / h^3 + c_s A / h^2): the first size
 // solves the model with k = 1, each further generation corrects k by the node count measured, so that one
 // to three generations land within +-3% of target_nodes (targets from 20,000 nodes first calibrate k on a
-// pilot mesh with 1/4 of the nodes, which costs about 1/4 of a generation). Sizes already tried bracket
+// pilot mesh with 1/4 of the nodes, which costs about 1/4 of a generation, unless the generator states its
+// shape's k: GeneratorRequest::node_factor). Sizes already tried bracket
 // the next guess, since on coarse meshes the count jumps in steps (whole segments per edge); after 5
 // generations, or once the bracket is 0.5% wide, the closest mesh is kept with a warning. Every step is
 // deterministic. Logs the node count, tet count, mesh size and time; throws InputError when Gmsh fails.
