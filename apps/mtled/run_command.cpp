@@ -182,10 +182,12 @@ int run_scene(const RunOptions& options) {
   choose_rank_backend(document);
   PluginCatalog catalog(plugin_search_path(options.scene.plugin_paths, scene_plugin_paths(document)));
   const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
-  if (!ranks().writes()) return replica_run(options, scene, catalog);
-  SceneRun run(options, scene, catalog, wall_start);
+  // On every rank: under mpirun Ctrl-C reaches each rank, and the others keep computing until rank 0 has finished
+  // its step and written "interrupted" (then the launcher ends them).
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
+  if (!ranks().writes()) return replica_run(options, scene, catalog);
+  SceneRun run(options, scene, catalog, wall_start);
   return run.run(options.progress);
 }
 

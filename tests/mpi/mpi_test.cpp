@@ -116,6 +116,28 @@ TEST(MpiFailure, OneFailingRankEndsTheRunWithAnErrorNotAHang) {
   EXPECT_FALSE(fs::exists(out / "result.vtu"));
 }
 
+// Ctrl-C reaches every rank through the launcher: the run ends as one process's does, summary.json "interrupted".
+TEST(MpiFailure, AnInterruptedRunSaysSo) {
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun is not installed";
+  const fs::path out = folder("interrupted");
+  const fs::path scene = fs::path(MTLED_TEST_SOURCE_DIR) / "share/scenes/needle_small_sample.json";
+  const std::string log = out.string() + ".log";
+  std::string script = "export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1\n";
+  script += "mpirun -np 2 '" + std::string(MTLED_EXECUTABLE) + "' run '" + scene.string() + "' -o '" + out.string() +
+            "' --threads 1 --no-progress > '" + log + "' 2>&1 &\npid=$!\n";
+  script += "(sleep 60; kill -KILL $pid) > /dev/null 2>&1 &\nwatchdog=$!\n";  // a hang fails the test, never CI
+  // Interrupt a second into the time loop (the puncture is logged at its first steps).
+  script += "for i in $(seq 300); do grep -q puncture '" + log + "' && break; sleep 0.1; done\nsleep 1\n";
+  script += "kill -INT $pid\nwait $pid\nstatus=$?\nkill $watchdog 2>/dev/null\nexit $status\n";
+  const fs::path file = out.string() + ".sh";
+  test::write_text(file, script);
+  const int status = std::system(("bash '" + file.string() + "'").c_str());
+  EXPECT_NE(status, 0);
+  const json summary = test::read_json(out / "summary.json");
+  EXPECT_EQ(summary["status"], "interrupted") << test::read_text(log);
+  EXPECT_FALSE(fs::exists(out / "result.vtu"));
+}
+
 TEST(MpiBackend, NamedWithoutALauncherItSaysHowToRunIt) {
   const fs::path out = folder("no_launcher");
   const auto result = test::run_mtled({"run", cube_scene().string(), "-o", out.string(), "--backend", "mpi"});
