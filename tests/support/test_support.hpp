@@ -64,6 +64,9 @@ struct CommandResult {
 CommandResult run_mtled(const std::vector<std::string>& arguments, const std::vector<std::string>& environment = {},
                         const std::vector<std::string>& launcher = {});
 
+// A CSV file as rows of fields (no quoting: the files mtled writes have none in these tests' labels).
+std::vector<std::vector<std::string>> read_csv(const std::filesystem::path& file);
+
 // Reads a whole file / parses a JSON file.
 std::string read_text(const std::filesystem::path& file);
 json read_json(const std::filesystem::path& file);

@@ -43,6 +43,7 @@ class CpuEngine : public StepEngine {
     double fastest_energy = 0.0;
   };
   int parts_for(Index nodes) const;
+  Index timed_forces(std::span<const double> u, std::span<double> f);  // forces(), counted and timed
   // body(begin, end, part) over `parts` contiguous shares of the nodes, on the team when there are several.
   template <class Body>
   void for_each_node_share(Body&& body, int parts);

@@ -155,11 +155,13 @@ class MpiBackend final : public CpuEngine {
     }
     owned_sum_.resize(3 * owned_.size());
     gathered_.resize(3 * nodes);
+    requests_.reserve(2 * static_cast<std::size_t>(ranks_));
   }
 
   // f holds this rank's contributions; afterwards every rank's sum, the same bits on every rank.
   void exchange(std::span<double> f) {
-    std::vector<MPI_Request> requests;
+    std::vector<MPI_Request>& requests = requests_;  // kept: no allocation in the time step
+    requests.clear();
     for (int q = 0; q < ranks_; ++q) {
       auto& in = receive_buffer_[static_cast<std::size_t>(q)];
       if (!in.empty()) {
@@ -225,6 +227,7 @@ class MpiBackend final : public CpuEngine {
   std::vector<Index> owned_, slot_, gather_order_;
   std::vector<int> gather_counts_, gather_offsets_;
   std::vector<double> owned_sum_, gathered_;
+  std::vector<MPI_Request> requests_;
   json partition_;
   bool whole_on_every_rank_ = false;
   double exchange_s_ = 0.0;
