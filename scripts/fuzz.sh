@@ -5,7 +5,7 @@
 # crashes, leaks, timeouts and out-of-memory inputs to build-fuzz/crashes/TARGET/, libFuzzer's output to
 # build-fuzz/runs/TARGET/fuzz-0.log. Exits non-zero when any target left a crash.
 #
-# usage: scripts/fuzz.sh [SECONDS] [TARGET...]    (targets: fuzz_scene fuzz_gmsh fuzz_vtk fuzz_abaqus fuzz_label_map)
+# usage: scripts/fuzz.sh [SECONDS] [TARGET...]    (targets: fuzz_scene fuzz_gmsh fuzz_vtk fuzz_abaqus fuzz_label_map fuzz_markups)
 # Reproduce a crash: build-fuzz/bin/TARGET build-fuzz/crashes/TARGET/crash-...
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,7 +14,7 @@ build=$root/build-fuzz
 seconds=${1:-600}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene fuzz_gmsh fuzz_vtk fuzz_abaqus fuzz_label_map)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_scene fuzz_gmsh fuzz_vtk fuzz_abaqus fuzz_label_map fuzz_markups)
 
 # Warnings are not errors here: the project's -Werror is kept for the GCC build, clang warns differently.
 cmake -S . -B "$build" -DCMAKE_CXX_COMPILER=clang++-14 \

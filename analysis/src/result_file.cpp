@@ -47,11 +47,19 @@ ResultField read_result_vtu(const fs::path& file) {
   if (displacement == grid.point_arrays.end() || displacement->components != 3 ||
       displacement->values.size() != 3 * grid.points.size())
     throw InputError(file.string(), "not an mtled result: no point array \"displacement\" of 3 components per point");
+  // Back to metres from a result written in millimetres (/output/length_unit).
+  double to_metres = 1.0;
+  if (grid.length_unit == "mm")
+    to_metres = 1e-3;
+  else if (!grid.length_unit.empty())
+    throw InputError(file.string(), fmt::format("field LENGTH_UNIT says \"{}\"; mtled writes \"mm\" or no such field "
+                                                "(metres)",
+                                                grid.length_unit));
   ResultField result;
-  result.points = grid.points;
+  for (const Vec3& p : grid.points) result.points.push_back(p * to_metres);
   for (std::size_t i = 0; i < grid.points.size(); ++i)
     result.displacement.push_back(
-        {displacement->values[3 * i], displacement->values[3 * i + 1], displacement->values[3 * i + 2]});
+        to_metres * Vec3{displacement->values[3 * i], displacement->values[3 * i + 1], displacement->values[3 * i + 2]});
   return result;
 }
 

@@ -66,6 +66,7 @@ std::string_view to_string(ParameterType type) {
     case ParameterType::number_list: return "number_list";
     case ParameterType::string_list: return "string_list";
     case ParameterType::node_set: return "node_set";
+    case ParameterType::file: return "file";
   }
   return "unknown";
 }
@@ -122,7 +123,8 @@ json ParameterSpec::to_json_schema() const {
     case ParameterType::number: s["type"] = "number"; add_bounds(s); break;
     case ParameterType::integer: s["type"] = "integer"; add_bounds(s); break;
     case ParameterType::boolean: s["type"] = "boolean"; break;
-    case ParameterType::string: s["type"] = "string"; break;
+    case ParameterType::string:
+    case ParameterType::file: s["type"] = "string"; break;
     case ParameterType::vector3:
       s = {{"type", "array"}, {"items", {{"type", "number"}}}, {"minItems", 3}, {"maxItems", 3}};
       break;
@@ -228,6 +230,9 @@ ParameterBuilder ComponentDeclaration::string_list(std::string name) {
 ParameterBuilder ComponentDeclaration::node_set(std::string name) {
   return add_new(std::move(name), ParameterType::node_set).unit("1");
 }
+ParameterBuilder ComponentDeclaration::file(std::string name) {
+  return add_new(std::move(name), ParameterType::file).unit("1");
+}
 
 const ParameterSpec* ComponentDeclaration::find(std::string_view name) const {
   for (const auto& p : parameters_)
@@ -319,6 +324,13 @@ std::optional<Vec3> Parameters::optional_vector3(std::string_view name) const {
   if (!has(name)) return std::nullopt;
   return vector3(name);
 }
+std::filesystem::path Parameters::file(std::string_view name) const {
+  return std::filesystem::path(value(name, ParameterType::file).get<std::string>());
+}
+std::optional<std::filesystem::path> Parameters::optional_file(std::string_view name) const {
+  if (!has(name)) return std::nullopt;
+  return file(name);
+}
 
 std::string pointer_escape(std::string_view key) {
   std::string out;
@@ -408,6 +420,9 @@ bool check_value(const ParameterSpec& spec, const json& v, const std::string& wh
     case ParameterType::string:
       if (!v.is_string()) return wrong_type("a string");
       return check_choice(spec, v, where, problems);
+    case ParameterType::file:
+      if (!v.is_string() || v.get<std::string>().empty()) return wrong_type("a file path");
+      return true;
     case ParameterType::vector3: {
       if (!v.is_array() || v.size() != 3 || !is_number(v[0]) || !is_number(v[1]) || !is_number(v[2]))
         return wrong_type("3 numbers [x, y, z]" + with_unit(spec));

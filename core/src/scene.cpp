@@ -320,7 +320,28 @@ namespace {
 
 struct Validator {
   PluginCatalog& catalog;
+  fs::path scene_directory;
   std::vector<Problem> problems;
+
+  // A file parameter's relative path is taken from the scene's folder; the file must exist.
+  json with_files_resolved(const ComponentDeclaration& declaration, const json& block, const std::string& pointer) {
+    json resolved = block;
+    for (const auto& spec : declaration.parameters()) {
+      if (spec.type != ParameterType::file) continue;
+      const auto it = resolved.find(spec.name);
+      if (it == resolved.end() || !it->is_string() || it->get<std::string>().empty()) continue;
+      fs::path path(it->get<std::string>());
+      if (path.is_relative()) path = scene_directory / path;
+      path = path.lexically_normal();
+      std::error_code ec;
+      if (!fs::is_regular_file(path, ec))
+        problems.push_back({pointer + "/" + pointer_escape(spec.name),
+                            fmt::format("no such file: {} (a relative path is taken from the scene's folder, {}; {})",
+                                        path.string(), scene_directory.string(), spec.doc)});
+      *it = path.string();
+    }
+    return resolved;
+  }
 
   std::optional<ComponentBlock> component(const json& block, const std::string& pointer, Category category) {
     if (!block.is_object()) {
@@ -343,7 +364,8 @@ struct Validator {
       problems.insert(problems.end(), e.problems().begin(), e.problems().end());
       return std::nullopt;
     }
-    Parameters parameters = validate_parameters(*declaration, block, pointer, problems);
+    Parameters parameters =
+        validate_parameters(*declaration, with_files_resolved(*declaration, block, pointer), pointer, problems);
     return ComponentBlock{name, std::move(parameters)};
   }
 
@@ -401,7 +423,7 @@ const Parameters& Scene::section(const std::string& key) const {
 }
 
 Scene validate_scene(SceneDocument document, PluginCatalog& catalog, const std::vector<SceneSection>& sections) {
-  Validator v{catalog, {}};
+  Validator v{catalog, document.directory(), {}};
   const json& root = document.root;
   const std::vector<std::string> keys = top_level_keys(sections);
   for (const auto& [key, value] : root.items()) {

@@ -31,7 +31,7 @@ class FlatPunchNeedle final : public NeedleModel {
   }
 
   void setup(const ModelView& model) override {
-    check_needle_enters_body(path_, model, parameters_);  // an entry off the body is refused, at its pointer
+    place_needle_path(path_, model, parameters_);  // an entry off the body is refused, at its pointer
     // The end's footprint: surface nodes within half a node spacing of the entry plane and the radius of
     // the axis.
     const double spacing = spacing_at_entry(path_, model);

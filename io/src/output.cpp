@@ -155,10 +155,11 @@ std::string data_array_tag(const VtuArray& array, const std::string& format_attr
 }
 
 std::vector<VtuArray> result_arrays(const TetMesh& mesh, std::span<const double> displacement,
-                                    const std::vector<CellField>& cell_fields) {
+                                    const std::vector<CellField>& cell_fields, double length_scale) {
   const std::size_t n = mesh.points.size(), cells = mesh.tets.size();
   std::vector<VtuArray> arrays;
   arrays.push_back({"displacement", "Float64", 3, 17, {displacement.begin(), displacement.end()}});
+  for (double& value : arrays.back().values) value *= length_scale;
   std::vector<double> point_region(n, std::numeric_limits<int>::max());
   for (std::size_t t = 0; t < cells; ++t)
     for (Index v : mesh.tets[t]) point_region[v] = std::min<double>(point_region[v], mesh.tet_region[t]);
@@ -166,7 +167,8 @@ std::vector<VtuArray> result_arrays(const TetMesh& mesh, std::span<const double>
   arrays.push_back({"region", "Int32", 1, 10, {mesh.tet_region.begin(), mesh.tet_region.end()}});
   for (const auto& field : cell_fields) arrays.push_back({field.name, "Float64", field.components, 10, field.values});
   VtuArray points{"", "Float64", 3, 17, {}};
-  for (const auto& p : mesh.points) points.values.insert(points.values.end(), p.begin(), p.end());
+  for (const auto& p : mesh.points)
+    for (const double x : p) points.values.push_back(x * length_scale);
   arrays.push_back(std::move(points));
   VtuArray connectivity{"connectivity", "Int64", 1, 10, {}}, offsets{"offsets", "Int64", 1, 10, {}};
   for (std::size_t t = 0; t < cells; ++t) {
@@ -182,9 +184,10 @@ std::vector<VtuArray> result_arrays(const TetMesh& mesh, std::span<const double>
 }  // namespace
 
 void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> displacement,
-               const std::vector<CellField>& cell_fields, VtuFormat format) {
-  const std::vector<VtuArray> arrays = result_arrays(mesh, displacement, cell_fields);
-  const bool binary = format == VtuFormat::binary;
+               const std::vector<CellField>& cell_fields, const VtuStyle& style) {
+  const bool millimetres = style.length_unit == LengthUnit::millimetre;
+  const std::vector<VtuArray> arrays = result_arrays(mesh, displacement, cell_fields, millimetres ? 1e3 : 1.0);
+  const bool binary = style.format == VtuFormat::binary;
   std::vector<std::string> appended;  // binary: each array's compressed block, in file order
   std::size_t offset = 0;
   const auto write_array = [&](const VtuArray& array) {
@@ -206,10 +209,18 @@ void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> d
                      binary ? " compressor=\"vtkZLibDataCompressor\"" : "")
       << "<UnstructuredGrid>\n";
   // A mesh from 3D Slicer tagged RAS keeps its tag (Slicer reads an untagged file as LPS, its default), as
-  // Slicer writes it: a string array of the characters and a 0.
-  if (mesh.coordinate_system == "RAS")
-    out << "<FieldData>\n<Array type=\"String\" Name=\"SPACE\" NumberOfTuples=\"1\" format=\"ascii\">82 65 83 0"
-           "</Array>\n</FieldData>\n";
+  // Slicer writes it: a string array of the characters and a 0. The length unit is tagged the same way.
+  const auto string_field = [&](std::string_view name, std::string_view text) {
+    out << fmt::format("<Array type=\"String\" Name=\"{}\" NumberOfTuples=\"1\" format=\"ascii\">", name);
+    for (const char c : text) out << static_cast<int>(c) << ' ';
+    out << "0</Array>\n";
+  };
+  if (mesh.coordinate_system == "RAS" || millimetres) {
+    out << "<FieldData>\n";
+    if (mesh.coordinate_system == "RAS") string_field("SPACE", "RAS");
+    if (millimetres) string_field("LENGTH_UNIT", "mm");
+    out << "</FieldData>\n";
+  }
   out << fmt::format("<Piece NumberOfPoints=\"{}\" NumberOfCells=\"{}\">\n", mesh.points.size(), mesh.tets.size())
       << "<PointData Vectors=\"displacement\">\n";
   const std::size_t first_cell_array = 2, points = arrays.size() - 4;

@@ -35,13 +35,20 @@ SceneSection output_section() {
         .choices({"binary", "ascii"})
         .doc("how result.vtu and steps/*.vtu store their arrays: \"binary\" (zlib-compressed, appended in base64, as "
              "VTK writes them) or \"ascii\" (text, about three times larger); both exact");
+    d.string("length_unit")
+        .defaults("m")
+        .choices({"m", "mm"})
+        .doc("unit of the coordinates and displacements in result.vtu and steps/*.vtu: \"m\", or \"mm\", 3D "
+             "Slicer's unit, so that a result of a label-map scene loads on top of its image (the file is tagged "
+             "LENGTH_UNIT; mtled compare reads it back in metres); stresses stay in Pa");
     return d;
   }();
   return {"output", &declaration};
 }
 
-VtuFormat vtu_format(const Parameters& output) {
-  return output.string("vtu_format") == "ascii" ? VtuFormat::ascii : VtuFormat::binary;
+VtuStyle vtu_style(const Parameters& output) {
+  return {output.string("vtu_format") == "ascii" ? VtuFormat::ascii : VtuFormat::binary,
+          output.string("length_unit") == "mm" ? LengthUnit::millimetre : LengthUnit::metre};
 }
 
 void OutputWriter::after_run(const StepRecord& last) { finish(last); }
@@ -124,7 +131,7 @@ void HistoryWriter::record_equilibrium(const StepRecord& step) {
 // ---- snapshots
 
 SnapshotWriter::SnapshotWriter(const OutputFolder& folder, const Parameters& output)
-    : folder_(folder), every_(output.integer("every_steps")), format_(vtu_format(output)) {}
+    : folder_(folder), every_(output.integer("every_steps")), style_(vtu_style(output)) {}
 
 void SnapshotWriter::before_run(const StepRecord& initial) { snapshot(initial); }  // the series starts with it
 
@@ -147,7 +154,7 @@ void SnapshotWriter::snapshot(const StepRecord& step) {
   const std::string file = fmt::format("steps/{:06d}.vtu", step.step);
   std::vector<double> u(step.u.size());
   step.model->interpolate(step.u, u);
-  folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, step.model->mesh(), u, {}, format_); });
+  folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, step.model->mesh(), u, {}, style_); });
   snapshots_.emplace_back(step.time, file);
   last_snapshot_ = step.step;
 }
@@ -169,7 +176,7 @@ std::vector<double> write_state(const OutputFolder& folder, const std::string& f
   std::vector<double> interpolated(u.size());
   model.interpolate(u, interpolated);
   const auto fields = with_cell_data ? cell_fields(model, u, output.string_list("cell_data")) : std::vector<CellField>{};
-  folder.write_file(file, [&](std::ostream& out) { write_vtu(out, model.mesh(), interpolated, fields, vtu_format(output)); });
+  folder.write_file(file, [&](std::ostream& out) { write_vtu(out, model.mesh(), interpolated, fields, vtu_style(output)); });
   return interpolated;
 }
 

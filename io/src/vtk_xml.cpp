@@ -256,7 +256,9 @@ class VtuParser {
     scan();
     UnstructuredGrid grid;
     for (auto& piece : pieces_) add_piece(grid, piece);
-    grid.coordinate_system = coordinate_system();
+    const std::string space = string_field(space_array_, "SPACE");
+    grid.coordinate_system = space == "LPS" || space == "RAS" ? space : "";
+    grid.length_unit = string_field(length_unit_array_, "LENGTH_UNIT");
     return grid;
   }
 
@@ -299,6 +301,8 @@ class VtuParser {
         section = Section::other;
       } else if (name == "Array" && section == Section::other && tag->attribute("Name") == "SPACE") {
         space_array_ = read_array_tag(*tag);  // 3D Slicer's string field data "SPACE": "LPS" or "RAS"
+      } else if (name == "Array" && section == Section::other && tag->attribute("Name") == "LENGTH_UNIT") {
+        length_unit_array_ = read_array_tag(*tag);  // mtled's results in millimetres: "mm"
       } else if (name == "DataArray") {
         ArraySpec array = read_array_tag(*tag);
         if (piece == nullptr || section == Section::none || section == Section::other) continue;
@@ -443,19 +447,20 @@ class VtuParser {
 
   std::string array_where(const ArraySpec& array) const { return fmt::format("{}:{}", scanner_.label(), array.line); }
 
-  // The frame 3D Slicer recorded: a string array's characters, ascii (as numbers) or binary.
-  std::string coordinate_system() {
-    if (!space_array_.present || space_array_.type != "String") return "";
+  // A string field's text (3D Slicer's "SPACE", mtled's "LENGTH_UNIT"): its characters, ascii (as numbers)
+  // or binary; empty when absent.
+  std::string string_field(const ArraySpec& array, std::string_view name) {
+    if (!array.present || array.type != "String") return "";
     std::string text;
-    if (space_array_.format == "ascii") {
-      TextCursor cursor(space_array_.content, scanner_.label(), scanner_.line_at(space_array_.content_begin));
+    if (array.format == "ascii") {
+      TextCursor cursor(array.content, scanner_.label(), scanner_.line_at(array.content_begin));
+      const std::string what = fmt::format("a character code of field \"{}\"", name);
       while (const auto token = cursor.next_token())
-        text += static_cast<char>(mesh_readers::to_integer(*token, cursor, "a character code of field \"SPACE\""));
+        text += static_cast<char>(mesh_readers::to_integer(*token, cursor, what));
     } else {
-      for (unsigned char c : binary_bytes(space_array_)) text += static_cast<char>(c);
+      for (unsigned char c : binary_bytes(array)) text += static_cast<char>(c);
     }
-    text = text.substr(0, text.find('\0'));
-    return text == "LPS" || text == "RAS" ? text : "";
+    return text.substr(0, text.find('\0'));
   }
 
   // All values of `array` as doubles (integers up to 2^53 are exact).
@@ -655,7 +660,7 @@ class VtuParser {
   bool big_endian_ = false;
   std::size_t header_size_ = 4;
   std::string compressor_;
-  ArraySpec space_array_;
+  ArraySpec space_array_, length_unit_array_;
   long compressor_line_ = 0;
   bool appended_base64_ = false;
   std::size_t appended_start_ = 0;

@@ -108,7 +108,7 @@ class KinematicNeedle final : public NeedleModel {
   }
 
   void setup(const ModelView& model) override {
-    check_needle_enters_body(path_, model, parameters_);
+    place_needle_path(path_, model, parameters_);
     const double spacing = spacing_at_entry(path_, model);
     capture_radius_ = capture_radius_option_.value_or(std::max(path_.radius, 0.6 * spacing));
     strain_radius_ = strain_radius_option_.value_or(std::max(2.0 * path_.radius, spacing));

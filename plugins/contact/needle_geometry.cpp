@@ -4,22 +4,127 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
+#include <fstream>
+#include <iterator>
+
+#include "mtled/errors.hpp"
+#include "mtled/json.hpp"
+
 namespace mtled {
 
 void declare_needle_path(ComponentDeclaration& d) {
   d.number("diameter").unit("m").positive().defaults(1.6e-3).doc("needle shaft diameter (the paper: 1.6 mm)");
-  d.vector3("entry").unit("m").doc("point on the body surface where the tip enters (reference coordinates)");
-  d.vector3("direction").unit("1").nonzero().defaults(json::array({0, 0, -1})).doc(
-      "insertion direction (normalised internally)");
-  d.number("depth").unit("m").positive().doc("final insertion depth: the tip's advance from the entry point");
+  d.vector3("entry").unit("m").optional().doc(
+      "point on the body surface where the tip enters (reference coordinates); give it or trajectory");
+  d.vector3("direction").unit("1").nonzero().optional().doc(
+      "insertion direction (normalised internally); default (0, 0, -1), or from the trajectory");
+  d.number("depth").unit("m").positive().optional().doc(
+      "final insertion depth: the tip's advance from the entry point; needed with entry, with trajectory the "
+      "distance from its entry to its target unless given");
+  d.file("trajectory").optional().doc(
+      "instead of entry and direction: a 3D Slicer markups file (.mrk.json) whose line (or first two points) runs "
+      "from the entry to the target, in its coordinateSystem (LPS or RAS) and coordinateUnits (mm); placed in the "
+      "mesh's frame when the mesh records one (a label map's)");
+}
+
+namespace {
+
+Vec3 markup_position(const json& point, const std::string& where) {
+  const auto position = point.find("position");
+  if (position == point.end() || !position->is_array() || position->size() != 3 ||
+      !std::all_of(position->begin(), position->end(), [](const json& x) { return x.is_number(); }))
+    throw InputError(where, "a control point needs \"position\": [x, y, z] (numbers)");
+  return Vec3((*position)[0].get<double>(), (*position)[1].get<double>(), (*position)[2].get<double>());
+}
+
+// A string member, or `otherwise` when absent; InputError when it is not a string.
+std::string text_member(const json& object, const char* key, const char* otherwise, const std::string& where) {
+  const auto it = object.find(key);
+  if (it == object.end()) return otherwise;
+  if (!it->is_string()) throw InputError(fmt::format("{}/{}", where, key), "expected a string");
+  return it->get<std::string>();
+}
+
+}  // namespace
+
+MarkupsTrajectory read_markups_trajectory(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), "cannot read the markups file");
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return parse_markups_trajectory(text, file.string());
+}
+
+MarkupsTrajectory parse_markups_trajectory(const std::string& text, const std::string& label) {
+  json root;
+  try {
+    root = json::parse(text);
+  } catch (const json::exception& e) {  // a syntax error, or a number out of range (out_of_range.406)
+    throw InputError(label, fmt::format("not a 3D Slicer markups file (.mrk.json): {}", e.what()));
+  }
+  const auto markups = root.find("markups");
+  if (!root.is_object() || markups == root.end() || !markups->is_array() || markups->empty() ||
+      !(*markups)[0].is_object())
+    throw InputError(label, "not a 3D Slicer markups file: no \"markups\" list (save a line or a point list from "
+                            "Slicer's Markups module as .mrk.json)");
+  const json& markup = (*markups)[0];
+  const std::string at = label + ": /markups/0";
+  const std::string type = text_member(markup, "type", "", at);
+  const std::string frame = text_member(markup, "coordinateSystem", "LPS", at);  // the schema's default
+  if (frame != "LPS" && frame != "RAS")
+    throw InputError(label + ": /markups/0/coordinateSystem",
+                     fmt::format("\"{}\" is not a frame mtled knows: \"LPS\" or \"RAS\"", frame));
+  const std::string units = text_member(markup, "coordinateUnits", "mm", at);
+  double to_metres = 0.0;
+  if (units == "mm") to_metres = 1e-3;
+  if (units == "um") to_metres = 1e-6;
+  if (to_metres == 0.0)
+    throw InputError(label + ": /markups/0/coordinateUnits",
+                     fmt::format("\"{}\" is not a unit mtled reads: \"mm\" or \"um\"", units));
+  std::vector<Vec3> points;
+  const auto control = markup.find("controlPoints");
+  if (control != markup.end() && control->is_array())
+    for (std::size_t i = 0; i < control->size() && points.size() < 2; ++i) {
+      const json& point = (*control)[i];
+      const std::string where = fmt::format("{}/controlPoints/{}", at, i);
+      if (!point.is_object() || text_member(point, "positionStatus", "defined", where) != "defined") continue;
+      points.push_back(to_metres * markup_position(point, where));
+    }
+  if (points.size() < 2)
+    throw InputError(label + ": /markups/0/controlPoints",
+                     fmt::format("the {} has {} placed control point{}; a needle trajectory needs two, the entry and "
+                                 "then the target (a Line markup, or a point list's first two points)",
+                                 type.empty() ? "markup" : type, points.size(), points.size() == 1 ? "" : "s"));
+  if ((points[1] - points[0]).norm() == 0.0)
+    throw InputError(label + ": /markups/0/controlPoints",
+                     "the entry and the target are the same point: the trajectory has no direction");
+  return {points[0], points[1], frame};
 }
 
 NeedlePath read_needle_path(const Parameters& p) {
   NeedlePath path;
-  path.entry = p.vector3("entry");
-  path.direction = p.vector3("direction").normalized();
-  path.depth = p.number("depth");
   path.radius = 0.5 * p.number("diameter");
+  if (const auto file = p.optional_file("trajectory")) {
+    for (const char* given : {"entry", "direction"})
+      if (p.has(given))
+        throw InputError(p.pointer(given), fmt::format("give either \"trajectory\" or \"entry\" and \"direction\", "
+                                                       "not both: the trajectory's line sets the {}",
+                                                       given));
+    const MarkupsTrajectory trajectory = read_markups_trajectory(*file);
+    path.frame = trajectory.frame;
+    path.entry = trajectory.entry;
+    path.direction = (trajectory.target - trajectory.entry).normalized();
+    path.depth = p.optional_number("depth").value_or((trajectory.target - trajectory.entry).norm());
+    return path;
+  }
+  if (!p.has("entry"))
+    throw InputError(p.pointer("entry"), "missing: the needle needs \"entry\" (m, a point on the body's surface) or "
+                                         "\"trajectory\" (a 3D Slicer markups file from the entry to the target)");
+  if (!p.has("depth"))
+    throw InputError(p.pointer("depth"), "missing: how far the tip advances from the entry (m), e.g. 0.02");
+  path.entry = p.vector3("entry");
+  path.direction = p.optional_vector3("direction").value_or(-Vec3::UnitZ()).normalized();
+  path.depth = p.number("depth");
   return path;
 }
 
@@ -50,7 +155,14 @@ double spacing_at_entry(const NeedlePath& path, const ModelView& model) {
   return nearest.empty() ? 0.0 : sum / static_cast<double>(nearest.size());
 }
 
-void check_needle_enters_body(const NeedlePath& path, const ModelView& model, const Parameters& p) {
+void place_needle_path(NeedlePath& path, const ModelView& model, const Parameters& p) {
+  const std::string& mesh_frame = model.mesh().coordinate_system;
+  if (!path.frame.empty() && !mesh_frame.empty() && path.frame != mesh_frame) {
+    const Vec3 flip(-1.0, -1.0, 1.0);  // LPS <-> RAS
+    path.entry = path.entry.cwiseProduct(flip);
+    path.direction = path.direction.cwiseProduct(flip);
+    path.frame = mesh_frame;
+  }
   const auto& surface = model.surface();
   std::vector<Index> nearest;
   model.node_search().nearest(path.entry, 64, nearest);
@@ -65,14 +177,21 @@ void check_needle_enters_body(const NeedlePath& path, const ModelView& model, co
     }
   }
   const double spacing = spacing_at_entry(path, model);
+  const bool from_markups = !path.frame.empty();
   if (closest < 0 || distance > 1.5 * spacing) {
     const Vec3 x = closest >= 0 ? model.nodes()[closest] : Vec3::Zero();
-    throw InputError(p.pointer("entry"),
+    throw InputError(p.pointer(from_markups ? "trajectory" : "entry"),
                      fmt::format("the entry point ({:.6g}, {:.6g}, {:.6g}) m is {:.3g} mm from the body's surface "
                                  "(nearest surface node at ({:.6g}, {:.6g}, {:.6g}) m; local node spacing {:.3g} mm): "
-                                 "the needle must enter through the surface; entry is in metres",
+                                 "the needle must enter through the surface; {}",
                                  path.entry[0], path.entry[1], path.entry[2], 1e3 * distance, x[0], x[1], x[2],
-                                 1e3 * spacing));
+                                 1e3 * spacing,
+                                 from_markups ? fmt::format("the trajectory's first point, in the mesh's frame ({}{})",
+                                                            path.frame,
+                                                            model.mesh().coordinate_system.empty()
+                                                                ? ": the mesh records none, so taken as it is"
+                                                                : "")
+                                              : std::string("entry is in metres")));
   }
   // Some nodes must lie ahead of the entry, near the axis, within the insertion depth.
   const double reach = std::max(path.radius, spacing);
@@ -82,7 +201,7 @@ void check_needle_enters_body(const NeedlePath& path, const ModelView& model, co
     if (s > 0.25 * spacing && s <= path.depth && path.radial(x) <= reach) ++ahead;
   }
   if (ahead == 0)
-    throw InputError(p.pointer("direction"),
+    throw InputError(p.pointer(from_markups ? "trajectory" : "direction"),
                      fmt::format("the needle path from the entry along ({:.3g}, {:.3g}, {:.3g}) meets no node of the "
                                  "body within the depth of {:.3g} mm: does the direction point into the body?",
                                  path.direction[0], path.direction[1], path.direction[2], 1e3 * path.depth));

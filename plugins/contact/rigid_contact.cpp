@@ -141,14 +141,14 @@ class RigidContactNeedle final : public NeedleModel {
                                    "for the default",
                                    1e3 * *footprint_radius_option_, 1e3 * path_.radius));
     contact_.name = "needle";
+  }
+
+  void setup(const ModelView& model) override {
+    place_needle_path(path_, model, parameters_);
     // A basis normal to the axis for azimuths of nodes that lie on it.
     const Vec3 helper = std::abs(path_.direction.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
     e1_ = path_.direction.cross(helper).normalized();
     e2_ = path_.direction.cross(e1_);
-  }
-
-  void setup(const ModelView& model) override {
-    check_needle_enters_body(path_, model, parameters_);
     spacing_ = spacing_at_entry(path_, model);
     footprint_radius_ = footprint_radius_option_.value_or(std::max(path_.radius, 0.6 * spacing_));
     capture_radius_ = capture_radius_option_.value_or(std::max(path_.radius, 0.6 * spacing_));

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "mtled/errors.hpp"
+#include "mtled/needle/needle_geometry.hpp"
 #include "mtled/scene.hpp"
 #include "mtled/simulation.hpp"
 #include "test_support.hpp"
@@ -166,4 +167,44 @@ TEST(KinematicNeedle, FreeLateralRefusesAnObliqueNeedle) {
 }
 
 }  // namespace
+// The needle's trajectory from a 3D Slicer markups file: the first two placed control points, in metres, in the
+// file's frame; what is not a usable markups file is refused naming the field.
+TEST(MarkupsTrajectory, ReadsSlicersLineAndPointList) {
+  const auto line = parse_markups_trajectory(
+      R"({"markups": [{"type": "Line", "coordinateSystem": "LPS", "coordinateUnits": "mm", "controlPoints": [
+          {"label": "L-1", "position": [25.0, 6.0, 70.0], "positionStatus": "defined"},
+          {"label": "L-2", "position": [25.0, 6.0, -30.0], "positionStatus": "defined"}]}]})",
+      "line.mrk.json");
+  EXPECT_EQ(line.frame, "LPS");
+  EXPECT_NEAR((line.entry - Vec3(0.025, 0.006, 0.070)).norm(), 0.0, 1e-17);
+  EXPECT_NEAR((line.target - Vec3(0.025, 0.006, -0.030)).norm(), 0.0, 1e-17);
+  // A point list in RAS and micrometres, its first point only previewed (not placed): the next two count.
+  const auto points = parse_markups_trajectory(
+      R"({"markups": [{"type": "Fiducial", "coordinateSystem": "RAS", "coordinateUnits": "um", "controlPoints": [
+          {"position": [1, 2, 3], "positionStatus": "preview"}, {"position": [1000, 0, 0]},
+          {"position": [0, 0, -2000]}, {"position": [9, 9, 9]}]}]})",
+      "points.mrk.json");
+  EXPECT_EQ(points.frame, "RAS");
+  EXPECT_NEAR((points.entry - Vec3(0.001, 0, 0)).norm(), 0.0, 1e-18);
+  EXPECT_NEAR((points.target - Vec3(0, 0, -0.002)).norm(), 0.0, 1e-18);
+
+  const auto refused = [](const std::string& text, const std::string& expected) {
+    try {
+      parse_markups_trajectory(text, "bad.mrk.json");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  refused("222e22222", "not a 3D Slicer markups file");  // a number out of range (found by fuzz_markups)
+  refused(R"({"nodes": []})", "no \"markups\" list");
+  refused(R"({"markups": [{"type": 3}]})", "/markups/0/type");
+  refused(R"({"markups": [{"coordinateSystem": "IJK"}]})", "coordinateSystem");
+  refused(R"({"markups": [{"coordinateUnits": "cm"}]})", "coordinateUnits");
+  refused(R"({"markups": [{"controlPoints": [{"position": [0, 0, 0]}]}]})", "needs two");
+  refused(R"({"markups": [{"controlPoints": [{"position": [0, 0]}, {"position": [0, 0, 1]}]}]})",
+          "/controlPoints/0");
+  refused(R"({"markups": [{"controlPoints": [{"position": [1, 1, 1]}, {"position": [1, 1, 1]}]}]})", "same point");
+}
+
 }  // namespace mtled

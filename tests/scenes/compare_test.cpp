@@ -8,6 +8,7 @@
 
 #include "mtled/analysis/compare.hpp"
 #include "mtled/io/output.hpp"
+#include "mtled/io/vtk_grid.hpp"
 #include "test_support.hpp"
 #include "xml_check.hpp"
 
@@ -25,11 +26,12 @@ void expect_contains(const std::string& text, const std::string& part) {
 // A 10 mm cube whose every node is prescribed the affine displacement d + G X (so result.vtu holds that
 // field to round-off: the constraint correction makes the interpolated displacement at constrained nodes
 // equal the prescribed value), meshed with about `nodes` nodes.
-fs::path affine_run(const std::string& name, const Mat3& G, const Vec3& d, int nodes) {
+fs::path affine_run(const std::string& name, const Mat3& G, const Vec3& d, int nodes,
+                    const json& output = json::object()) {
   std::vector<double> gradient(9);
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) gradient[static_cast<std::size_t>(3 * r + c)] = G(r, c);  // row by row
-  const json scene = {
+  json scene = {
       {"mesh", {{"type", "box"}, {"size", {0.01, 0.01, 0.01}}, {"target_nodes", nodes}}},
       {"shape_function", {{"type", "mls"}}},
       {"materials", {{{"type", "neo_hookean"}, {"mu", 1000}, {"D", 4.02684e-5}}}},
@@ -40,6 +42,7 @@ fs::path affine_run(const std::string& name, const Mat3& G, const Vec3& d, int n
          {"displacement", {d[0], d[1], d[2]}},
          {"gradient", gradient}}}},
       {"integrator", {{"type", "dynamic_relaxation"}, {"load_steps", 20}, {"tolerance", 1e-6}}}};
+  if (!output.empty()) scene["output"] = output;
   const fs::path folder = scratch_dir("compare-" + name);
   write_text(folder / "scene.json", scene.dump(2));
   const auto result = run_mtled({"run", (folder / "scene.json").string(), "-o", (folder / "out").string(), "--threads", "1"});
@@ -130,6 +133,32 @@ TEST(Compare, TransferRoundTripOfASmoothFieldIsSecondOrder) {
     previous = error;
   }
   EXPECT_LT(previous, 1e-2 * 1e-4);  // 24 cells across: 0.5% of the amplitude, below the needle study's 1e-2 NRMSE
+}
+
+// /output/length_unit = "mm" (3D Slicer's unit): the file holds coordinates and displacements x 1000 and says
+// so; mtled reads it back in metres, so the affine field is recovered and compares equal to the run in metres.
+TEST(Compare, AResultInMillimetresReadsBackInMetres) {
+  const fs::path metres = affine_run("unit-m", kG, kD, 300);
+  const fs::path millimetres = affine_run("unit-mm", kG, kD, 300, {{"length_unit", "mm"}});
+  const std::string text = read_text(millimetres / "result.vtu");
+  expect_contains(text, "Name=\"LENGTH_UNIT\"");
+  const ResultField field = read_result_vtu(millimetres / "result.vtu");
+  const ResultField reference = read_result_vtu(metres / "result.vtu");
+  ASSERT_EQ(field.points.size(), reference.points.size());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < field.points.size(); ++i) {
+    // x 1000 then x 0.001: two roundings of coordinates up to 0.01 m (ulp 1.7e-18)
+    EXPECT_LE((field.points[i] - reference.points[i]).cwiseAbs().maxCoeff(), 4e-18) << i;
+    worst = std::max(worst, (field.displacement[i] - (kD + kG * field.points[i])).cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(worst, 1e-9 * 1e-3);  // the affine field to round-off of its 1e-3 m size
+  const json report = compare_json(metres, millimetres);
+  for (const char* name : {"ux", "uy", "uz"}) EXPECT_LT(report["nrmse"][name].get<double>(), 1e-12) << name;
+  // The raw file really is in millimetres: read as a plain grid, its points are 1000 times the metres.
+  const auto grid = vtk::read_vtu(mesh_readers::read_text_file(millimetres / "result.vtu", "result.vtu"), {});
+  EXPECT_EQ(grid.length_unit, "mm");
+  ASSERT_EQ(grid.points.size(), reference.points.size());
+  EXPECT_NEAR(grid.points[7][0], 1e3 * reference.points[7][0], 1e-12);
 }
 
 // u_A = (d + G X) and u_B = 2 (d + G X): u_A - u_B = -(d + G X), so NRMSE_k = sqrt(mean of (d + G X)_k^2) /

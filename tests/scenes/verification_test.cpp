@@ -99,6 +99,77 @@ INSTANTIATE_TEST_SUITE_P(ShippedScenes, UniaxialCube,
                                            UniaxialCase{"uniaxial_cube_neohookean.json",
                                                         neo_hookean(1000.0, 4.02684e-5)}));
 
+// A needle planned in 3D Slicer: its trajectory, a markups line from the entry to the target in millimetres, in
+// LPS or in RAS (x and y negated), gives the same insertion into a labelled cube (LPS) as entry, direction and
+// depth given in metres; bad markups are refused naming the file or the scene key.
+TEST(LabelMapNeedle, AMarkupsTrajectoryInEitherFrameIsTheSameNeedle) {
+  if (!fs::exists(plugin_dir() / "mtled-mesh-label_map.so")) GTEST_SKIP() << "built without CGAL (label_map)";
+  const fs::path folder = scratch_dir("label_map_needle");
+  const std::string python = "/usr/bin/python3 " + (source_dir() / "scripts/label_maps/write_label_map.py").string();
+  ASSERT_EQ(std::system((python + " cube " + (folder / "cube.nrrd").string() + " --size 32").c_str()), 0);
+  const auto markups = [&](const std::string& name, const std::string& frame, double sign, int points) {
+    json control = json::array();
+    for (const double z : {4.0, 1.0})  // mm: the top face, then 3 mm down
+      if (static_cast<int>(control.size()) < points)
+        control.push_back({{"label", fmt::format("L-{}", control.size() + 1)},
+                           {"position", {sign * 0.5, sign * 0.3, z}},
+                           {"positionStatus", "defined"}});
+    write_text(folder / name, json{{"markups", {{{"type", "Line"}, {"coordinateSystem", frame},
+                                                {"coordinateUnits", "mm"}, {"controlPoints", control}}}}}
+                                  .dump(2));
+  };
+  markups("line_lps.mrk.json", "LPS", 1.0, 2);
+  markups("line_ras.mrk.json", "RAS", -1.0, 2);
+  markups("one_point.mrk.json", "LPS", 1.0, 1);
+  const auto run = [&](const std::string& name, const json& needle) {
+    json needle_block = {{"type", "kinematic"}, {"diameter", 0.0008}};
+    needle_block.update(needle);
+    const json scene = {
+        {"mesh", {{"type", "label_map"}, {"path", "cube.nrrd"}, {"target_nodes", 1500}}},
+        {"shape_function", {{"type", "mmls"}}},
+        {"materials", {{{"type", "neo_hookean"}, {"mu", 1000}, {"D", 4.02684e-5}, {"density", 1000}}}},
+        {"boundaries",
+         {{{"type", "fixed"}, {"name", "bottom"},
+           {"nodes", {{"plane", {{"point", {0, 0, -0.004}}, {"normal", {0, 0, 1}}}}, {"tolerance", 2e-4}}}}}},
+        {"needle", needle_block},
+        {"integrator", {{"type", "dynamic_relaxation"}, {"load_steps", 60}, {"tolerance", 1e-4}}}};
+    write_text(folder / (name + ".json"), scene.dump(2));
+    return run_mtled({"run", (folder / (name + ".json")).string(), "-o", (folder / name).string(), "--threads", "1"});
+  };
+  const auto metres = run("metres", {{"entry", {0.0005, 0.0003, 0.004}}, {"direction", {0, 0, -1}}, {"depth", 0.003}});
+  ASSERT_EQ(metres.exit_code, 0) << metres.output;
+  const auto lps = run("lps", {{"trajectory", "line_lps.mrk.json"}});
+  ASSERT_EQ(lps.exit_code, 0) << lps.output;
+  const auto ras = run("ras", {{"trajectory", "line_ras.mrk.json"}});
+  ASSERT_EQ(ras.exit_code, 0) << ras.output;
+  const auto force = [&](const std::string& name) {
+    const auto rows = read_csv(folder / name / "needle.csv");
+    EXPECT_GE(rows.size(), 2u) << name;  // the header and the converged last row
+    EXPECT_EQ(rows.back()[3], "penetration") << name;
+    return std::pair{std::stod(rows.back()[1]), std::stod(rows.back()[2])};
+  };
+  const auto [depth_m, force_m] = force("metres");
+  const auto [depth_lps, force_lps] = force("lps");
+  const auto [depth_ras, force_ras] = force("ras");
+  EXPECT_GT(force_m, 0.0);
+  // 0.5 mm x 1e-3 and 0.0005 may differ in the last bit: the same needle to round-off.
+  EXPECT_NEAR(depth_lps, 0.003, 1e-15);
+  EXPECT_NEAR(depth_ras, 0.003, 1e-15);
+  EXPECT_NEAR(force_lps, force_m, 1e-9 * force_m);
+  EXPECT_NEAR(force_ras, force_m, 1e-9 * force_m);
+
+  const auto one = run("one_point", {{"trajectory", "one_point.mrk.json"}});
+  EXPECT_EQ(one.exit_code, 2) << one.output;
+  EXPECT_NE(one.output.find("one_point.mrk.json"), std::string::npos) << one.output;
+  EXPECT_NE(one.output.find("needs two"), std::string::npos) << one.output;
+  const auto missing = run("missing", {{"trajectory", "nowhere.mrk.json"}});
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("/needle/trajectory"), std::string::npos) << missing.output;
+  const auto both = run("both", {{"trajectory", "line_lps.mrk.json"}, {"entry", {0.0005, 0.0003, 0.004}}});
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+  EXPECT_NE(both.output.find("either"), std::string::npos) << both.output;
+}
+
 // A cube segmented in an image (scripts/label_maps/write_label_map.py cube: 8 mm, 0.5 mm voxels) meshed by CGAL
 // (label_map), compressed 10% between frictionless platens like the shipped cube, against the exact homogeneous
 // solution and the same cube meshed by Gmsh (box). The label map's cube has rounded edges (its surface follows the

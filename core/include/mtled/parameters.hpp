@@ -4,6 +4,7 @@
 // generated parameter reference (docs/parameters.md) and the conformance tests.
 #include "mtled/json.hpp"
 
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -37,7 +38,9 @@ constexpr Category category_from_literal(std::string_view text) {
 std::optional<Category> category_from_string(std::string_view text);
 const std::vector<Category>& plugin_categories();
 
-enum class ParameterType { number, integer, boolean, string, vector3, number_list, string_list, node_set };
+// `file`: a path (a string in the scene); a relative one is taken from the scene file's folder when the scene is
+// validated, which also checks that the file exists, so a component reads Parameters::file as an absolute path.
+enum class ParameterType { number, integer, boolean, string, vector3, number_list, string_list, node_set, file };
 
 std::string_view to_string(ParameterType type);
 
@@ -105,6 +108,7 @@ class ComponentDeclaration {
   ParameterBuilder number_list(std::string name);
   ParameterBuilder string_list(std::string name);
   ParameterBuilder node_set(std::string name);
+  ParameterBuilder file(std::string name);
   ComponentDeclaration& add(ParameterSpec spec);  // a spec built elsewhere (the kernel's common parameters)
 
   const std::string& name() const { return name_; }
@@ -147,10 +151,12 @@ class Parameters {
   std::vector<double> number_list(std::string_view name) const;
   std::vector<std::string> string_list(std::string_view name) const;
   NodeSelector node_set(std::string_view name) const;
+  std::filesystem::path file(std::string_view name) const;  // as validate_scene resolved it
 
   std::optional<double> optional_number(std::string_view name) const;
   std::optional<std::string> optional_string(std::string_view name) const;
   std::optional<Vec3> optional_vector3(std::string_view name) const;
+  std::optional<std::filesystem::path> optional_file(std::string_view name) const;
 
  private:
   const json& value(std::string_view name, ParameterType expected) const;

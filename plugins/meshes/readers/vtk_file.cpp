@@ -45,7 +45,8 @@ class VtkFileReader final : public MeshSource {
         "ParaView, meshio and 3D Slicer save), chosen by the file extension. 3D Slicer's \"SPACE\" tag (LPS or "
         "RAS) is kept with the mesh and carried into results. Other cells (vertices, lines, triangles) "
         "are skipped; other volume cells are refused. Regions come from an integer cell array; node sets from "
-        "the point arrays named in \"node_set_arrays\". Reads mtled's own result.vtu. The example reads the "
+        "the point arrays named in \"node_set_arrays\". Reads mtled's own result.vtu (one written in millimetres, "
+        "tagged LENGTH_UNIT, is read back in metres). The example reads the "
         "fixture tests/data/meshes/cube.vtu (a path from the source tree's root).");
     mesh_readers::declare_file_parameters(d, "VTK: legacy .vtk (ASCII or binary), or XML .vtu");
     d.string("region_array")
@@ -101,7 +102,9 @@ class VtkFileReader final : public MeshSource {
     mesh.coordinate_system = grid.coordinate_system;
     assign_regions(mesh, grid, region_array, file.label);
     for (const auto& name : node_set_arrays) add_node_set(mesh, grid, name);
-    mesh_readers::finish_mesh(mesh, parameters_.number("scale"), file.label);
+    // An mtled result written in millimetres says so (LENGTH_UNIT): back to metres before `scale`.
+    const double file_unit = grid.length_unit == "mm" ? 1e-3 : 1.0;
+    mesh_readers::finish_mesh(mesh, file_unit * parameters_.number("scale"), file.label);
     return mesh;
   }
 

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -98,28 +99,35 @@ TEST(VtkFile, ScaleMultipliesCoordinates) {
     for (int d = 0; d < 3; ++d) EXPECT_EQ(scaled.points[i][d], metres.points[i][d] * 0.001);
 }
 
-void expect_round_trip(const TetMesh& original, const std::string& test, VtuFormat format);
+void expect_round_trip(const TetMesh& original, const std::string& test, const VtuStyle& style);
 
-// mtled's result.vtu (core write_vtu) read back as a mesh, in both formats: same points (binary doubles, or
-// 17 digits: exact), same tets in the same order, regions named by their index.
+// mtled's result.vtu (core write_vtu) read back as a mesh, in both formats and both length units: same points
+// (binary doubles, or 17 digits: exact in metres; in millimetres back in metres to the rounding of x 1000 and
+// x 0.001), same tets in the same order, regions named by their index.
 void expect_round_trip(const TetMesh& original, const std::string& test) {
-  for (const VtuFormat format : {VtuFormat::binary, VtuFormat::ascii}) {
-    SCOPED_TRACE(format == VtuFormat::binary ? "binary" : "ascii");
-    expect_round_trip(original, test, format);
-  }
+  for (const VtuFormat format : {VtuFormat::binary, VtuFormat::ascii})
+    for (const LengthUnit unit : {LengthUnit::metre, LengthUnit::millimetre}) {
+      SCOPED_TRACE(fmt::format("{}, {}", format == VtuFormat::binary ? "binary" : "ascii",
+                               unit == LengthUnit::metre ? "m" : "mm"));
+      expect_round_trip(original, test, {format, unit});
+    }
 }
 
-void expect_round_trip(const TetMesh& original, const std::string& test, VtuFormat format) {
+void expect_round_trip(const TetMesh& original, const std::string& test, const VtuStyle& style) {
   std::vector<double> displacement(3 * original.points.size(), 1e-3);
   std::vector<CellField> fields{{"stress", 6, std::vector<double>(6 * original.tets.size(), 1.0)}};
   const auto dir = scratch_dir("vtk_file/" + test);
   {
     std::ofstream out(dir / "result.vtu", std::ios::binary);
-    write_vtu(out, original, displacement, fields, format);
+    write_vtu(out, original, displacement, fields, style);
   }
   const TetMesh read = read_mesh("vtk_file", {{"path", "result.vtu"}}, dir);
   ASSERT_EQ(read.points.size(), original.points.size());
-  for (std::size_t i = 0; i < read.points.size(); ++i) EXPECT_EQ(read.points[i], original.points[i]) << "point " << i;
+  const double rounding = style.length_unit == LengthUnit::metre ? 0.0 : 4e-16;
+  for (std::size_t i = 0; i < read.points.size(); ++i)
+    for (int d = 0; d < 3; ++d)
+      EXPECT_NEAR(read.points[i][d], original.points[i][d], rounding * std::abs(original.points[i][d]))
+          << "point " << i;
   ASSERT_EQ(read.tets, original.tets);
   ASSERT_EQ(read.tet_region.size(), original.tet_region.size());
   for (std::size_t t = 0; t < read.tets.size(); ++t)

@@ -54,10 +54,21 @@ struct CellField {
 // a third of the text's size), or ASCII text with full precision.
 enum class VtuFormat { binary, ascii };
 
+// The unit of result files' coordinates and displacements: metres (mtled's unit), or millimetres, the unit of
+// 3D Slicer and of most medical images, so that a result loads on top of the image its mesh came from.
+// Stresses and strains are unchanged (Pa, 1).
+enum class LengthUnit { metre, millimetre };
+
+struct VtuStyle {
+  VtuFormat format = VtuFormat::binary;
+  LengthUnit length_unit = LengthUnit::metre;
+};
+
 // An unstructured-grid VTK XML file readable by ParaView, VTK, meshio and 3D Slicer: the reference mesh
 // with point data "displacement" and "region" and the given cell data. Doubles are written exactly in
-// both formats.
+// both formats. In millimetres the file says so in a string field "LENGTH_UNIT" ("mm"), which
+// read_result_vtu honours.
 void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> displacement,
-               const std::vector<CellField>& cell_fields, VtuFormat format = VtuFormat::binary);
+               const std::vector<CellField>& cell_fields, const VtuStyle& style = {});
 
 }  // namespace mtled

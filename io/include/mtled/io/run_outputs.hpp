@@ -19,7 +19,7 @@ namespace mtled {
 
 // The "output" section of a scene (validate_scene), declared by the writers.
 SceneSection output_section();
-VtuFormat vtu_format(const Parameters& output);
+VtuStyle vtu_style(const Parameters& output);
 
 // A StepMonitor that records steps into files. finish() completes them with the run's last state (once); the time
 // loop calls it after the run's last step, and whoever stops a run calls it too, so that a run that ends unstable
@@ -70,7 +70,7 @@ class SnapshotWriter final : public OutputWriter {
 
   const OutputFolder& folder_;
   long every_;
-  VtuFormat format_;
+  VtuStyle style_;
   long last_snapshot_ = -1;
   std::vector<std::pair<double, std::string>> snapshots_;
 };

@@ -39,6 +39,7 @@ struct UnstructuredGrid {
   std::vector<DataArray> cell_arrays;
   std::vector<DataArray> point_arrays;
   std::string coordinate_system;  // "LPS" or "RAS" when the file says (3D Slicer's "SPACE"), else empty
+  std::string length_unit;        // "mm" in an mtled result written in millimetres ("LENGTH_UNIT"), else empty
 };
 
 // Adds the cells of one piece: 4-node tets (VTK_TETRA = 10) are kept, vertices, lines and surface cells are

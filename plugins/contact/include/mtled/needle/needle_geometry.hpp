@@ -1,7 +1,9 @@
 #pragma once
 // What every needle model shares: the straight needle's parameters and path, checks that it enters the
 // body, and the nodes along its path.
+#include <filesystem>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "mtled/interfaces/driver.hpp"
@@ -10,6 +12,9 @@
 namespace mtled {
 
 struct NeedlePath {
+  // The frame entry and direction are in: "LPS" or "RAS" when they came from a 3D Slicer markups file
+  // (`trajectory`), empty when the scene gave them (the mesh's own coordinates).
+  std::string frame;
   Vec3 entry = Vec3::Zero();
   Vec3 direction = -Vec3::UnitZ();  // unit
   double depth = 0.0;               // final tip advance from the entry (m)
@@ -21,13 +26,27 @@ struct NeedlePath {
   Vec3 tip(double advance) const { return entry + advance * direction; }
 };
 
-// Declares diameter, entry, direction and depth (shared by all needle models).
+// Declares diameter, entry, direction, depth and trajectory (shared by all needle models). The path is either
+// entry (+ direction, depth) in metres, or a 3D Slicer markups file (.mrk.json) whose line, or whose first two
+// points, run from the entry to the target (depth: their distance unless given).
 void declare_needle_path(ComponentDeclaration& d);
 NeedlePath read_needle_path(const Parameters& p);
 
-// Refuses an entry point that is off the body (no surface node within 1.5 mean edge lengths) or a path
-// that meets no nodes of the body, with the scene pointer and a suggestion.
-void check_needle_enters_body(const NeedlePath& path, const ModelView& model, const Parameters& p);
+
+// The two points a 3D Slicer markups file (.mrk.json) gives a needle: its first markup's first two defined
+// control points, in metres, in the file's coordinateSystem. InputError naming the file otherwise.
+struct MarkupsTrajectory {
+  Vec3 entry, target;
+  std::string frame;  // "LPS" or "RAS"
+};
+MarkupsTrajectory read_markups_trajectory(const std::filesystem::path& file);
+MarkupsTrajectory parse_markups_trajectory(const std::string& text, const std::string& label);  // the file's text
+
+// First in a needle's setup(): puts a path read from a markups file, which is in the file's frame, into the mesh's
+// (LPS and RAS differ in the sign of x and y) where the mesh records its frame (label maps, Slicer's files); then
+// refuses an entry point that is off the body (no surface node within 1.5 mean edge lengths) or a path that meets
+// no nodes of the body, with the scene pointer and a suggestion.
+void place_needle_path(NeedlePath& path, const ModelView& model, const Parameters& p);
 
 // Mean edge length of the surface nodes nearest the entry: the local node spacing where the needle enters.
 double spacing_at_entry(const NeedlePath& path, const ModelView& model);
