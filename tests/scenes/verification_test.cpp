@@ -10,6 +10,7 @@
 
 #include "mtled/analysis/result_file.hpp"
 #include "mtled/io/output.hpp"
+#include "mtled/io/vtk_grid.hpp"
 #include "mtled/mesh.hpp"
 #include "test_support.hpp"
 
@@ -121,7 +122,7 @@ TEST(LabelMapNeedle, AMarkupsTrajectoryInEitherFrameIsTheSameNeedle) {
   markups("line_lps.mrk.json", "LPS", 1.0, 2);
   markups("line_ras.mrk.json", "RAS", -1.0, 2);
   markups("one_point.mrk.json", "LPS", 1.0, 1);
-  const auto run = [&](const std::string& name, const json& needle) {
+  const auto run = [&](const std::string& name, const json& needle, const json& output = json::object()) {
     json needle_block = {{"type", "kinematic"}, {"diameter", 0.0008}};
     needle_block.update(needle);
     const json scene = {
@@ -132,14 +133,28 @@ TEST(LabelMapNeedle, AMarkupsTrajectoryInEitherFrameIsTheSameNeedle) {
          {{{"type", "fixed"}, {"name", "bottom"},
            {"nodes", {{"plane", {{"point", {0, 0, -0.004}}, {"normal", {0, 0, 1}}}}, {"tolerance", 2e-4}}}}}},
         {"needle", needle_block},
-        {"integrator", {{"type", "dynamic_relaxation"}, {"load_steps", 60}, {"tolerance", 1e-4}}}};
+        {"integrator", {{"type", "dynamic_relaxation"}, {"load_steps", 60}, {"tolerance", 1e-4}}},
+        {"output", output}};
     write_text(folder / (name + ".json"), scene.dump(2));
     return run_mtled({"run", (folder / (name + ".json")).string(), "-o", (folder / name).string(), "--threads", "1"});
   };
   const auto metres = run("metres", {{"entry", {0.0005, 0.0003, 0.004}}, {"direction", {0, 0, -1}}, {"depth", 0.003}});
   ASSERT_EQ(metres.exit_code, 0) << metres.output;
-  const auto lps = run("lps", {{"trajectory", "line_lps.mrk.json"}});
+  const auto lps = run("lps", {{"trajectory", "line_lps.mrk.json"}}, {{"length_unit", "mm"}});
   ASSERT_EQ(lps.exit_code, 0) << lps.output;
+  // Its result in millimetres lies where the image puts the cube: 16 voxels of 0.5 mm about the origin, +-4 mm in
+  // the file's LPS frame (the surface within a voxel of the labels' boundary).
+  const auto grid = vtk::read_vtu(mesh_readers::read_text_file(folder / "lps" / "result.vtu", "result.vtu"), {});
+  EXPECT_EQ(grid.length_unit, "mm");
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const Vec3& x : grid.points) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  }
+  for (int d = 0; d < 3; ++d) {
+    EXPECT_NEAR(lo[d], -4.0, 0.5) << d;
+    EXPECT_NEAR(hi[d], 4.0, 0.5) << d;
+  }
   const auto ras = run("ras", {{"trajectory", "line_ras.mrk.json"}});
   ASSERT_EQ(ras.exit_code, 0) << ras.output;
   const auto force = [&](const std::string& name) {
