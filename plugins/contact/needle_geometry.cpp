@@ -10,6 +10,7 @@
 
 #include "mtled/errors.hpp"
 #include "mtled/json.hpp"
+#include "mtled/log.hpp"
 
 namespace mtled {
 
@@ -163,6 +164,12 @@ void place_needle_path(NeedlePath& path, const ModelView& model, const Parameter
     path.direction = path.direction.cwiseProduct(flip);
     path.frame = mesh_frame;
   }
+  if (!path.frame.empty())  // say where the markups put it, in the mesh's coordinates
+    log().info("needle trajectory {}: entry ({:.6g}, {:.6g}, {:.6g}) m, direction ({:.4g}, {:.4g}, {:.4g}), depth {:.4g} mm, "
+               "in the mesh's frame ({})",
+               p.file("trajectory").filename().string(), path.entry[0], path.entry[1], path.entry[2],
+               path.direction[0] + 0.0, path.direction[1] + 0.0, path.direction[2] + 0.0, 1e3 * path.depth,  // no "-0"
+               mesh_frame.empty() ? path.frame + " as given: the mesh records none" : mesh_frame);
   const auto& surface = model.surface();
   std::vector<Index> nearest;
   model.node_search().nearest(path.entry, 64, nearest);
