@@ -48,13 +48,7 @@ ResultField read_result_vtu(const fs::path& file) {
       displacement->values.size() != 3 * grid.points.size())
     throw InputError(file.string(), "not an mtled result: no point array \"displacement\" of 3 components per point");
   // Back to metres from a result written in millimetres (/output/length_unit).
-  double to_metres = 1.0;
-  if (grid.length_unit == "mm")
-    to_metres = 1e-3;
-  else if (!grid.length_unit.empty())
-    throw InputError(file.string(), fmt::format("field LENGTH_UNIT says \"{}\"; mtled writes \"mm\" or no such field "
-                                                "(metres)",
-                                                grid.length_unit));
+  const double to_metres = vtk::metres_per_length_unit(grid, file.string());
   ResultField result;
   for (const Vec3& p : grid.points) result.points.push_back(p * to_metres);
   for (std::size_t i = 0; i < grid.points.size(); ++i)

@@ -323,7 +323,8 @@ struct Validator {
   fs::path scene_directory;
   std::vector<Problem> problems;
 
-  // A file parameter's relative path is taken from the scene's folder; the file must exist.
+  // A file parameter's relative path is taken from the scene's folder (in components and sections alike); the file
+  // must exist.
   json with_files_resolved(const ComponentDeclaration& declaration, const json& block, const std::string& pointer) {
     json resolved = block;
     for (const auto& spec : declaration.parameters()) {
@@ -476,11 +477,14 @@ Scene validate_scene(SceneDocument document, PluginCatalog& catalog, const std::
     discretisation.erase("volumetric");
   }
   const json empty = json::object();
-  scene.discretisation =
-      validate_parameters(discretisation_declaration(), discretisation, "/discretisation", v.problems, {});
-  for (const auto& section : sections)
-    scene.sections[section.key] = validate_parameters(*section.declaration, root.value(section.key, empty),
-                                                      "/" + section.key, v.problems, {});
+  scene.discretisation = validate_parameters(
+      discretisation_declaration(), v.with_files_resolved(discretisation_declaration(), discretisation, "/discretisation"),
+      "/discretisation", v.problems, {});
+  for (const auto& section : sections) {
+    const std::string pointer = "/" + section.key;
+    const json block = v.with_files_resolved(*section.declaration, root.value(section.key, empty), pointer);
+    scene.sections[section.key] = validate_parameters(*section.declaration, block, pointer, v.problems, {});
+  }
 
   // At most one material may omit "region" (it fills every region the others leave).
   int without_region = 0;

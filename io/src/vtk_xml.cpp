@@ -669,6 +669,13 @@ class VtuParser {
 
 }  // namespace
 
+double metres_per_length_unit(const UnstructuredGrid& grid, const std::string& label) {
+  if (grid.length_unit.empty()) return 1.0;
+  if (grid.length_unit == "mm") return 1e-3;
+  throw InputError(label, fmt::format("field LENGTH_UNIT says \"{}\"; mtled writes \"mm\" or no such field (metres)",
+                                      grid.length_unit));
+}
+
 UnstructuredGrid read_vtu(const mesh_readers::MeshFileText& file, const ArrayRequest& request) {
   return VtuParser(file, request).parse();
 }

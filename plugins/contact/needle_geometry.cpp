@@ -164,12 +164,14 @@ void place_needle_path(NeedlePath& path, const ModelView& model, const Parameter
     path.direction = path.direction.cwiseProduct(flip);
     path.frame = mesh_frame;
   }
-  if (!path.frame.empty())  // say where the markups put it, in the mesh's coordinates
+  const bool from_markups = !path.frame.empty();
+  const std::string frame_said = mesh_frame.empty() ? path.frame + " as given: the mesh records none" : mesh_frame;
+  if (from_markups)  // say where the markups put it, in the mesh's coordinates
     log().info("needle trajectory {}: entry ({:.6g}, {:.6g}, {:.6g}) m, direction ({:.4g}, {:.4g}, {:.4g}), depth {:.4g} mm, "
                "in the mesh's frame ({})",
                p.file("trajectory").filename().string(), path.entry[0], path.entry[1], path.entry[2],
                path.direction[0] + 0.0, path.direction[1] + 0.0, path.direction[2] + 0.0, 1e3 * path.depth,  // no "-0"
-               mesh_frame.empty() ? path.frame + " as given: the mesh records none" : mesh_frame);
+               frame_said);
   const auto& surface = model.surface();
   std::vector<Index> nearest;
   model.node_search().nearest(path.entry, 64, nearest);
@@ -184,7 +186,6 @@ void place_needle_path(NeedlePath& path, const ModelView& model, const Parameter
     }
   }
   const double spacing = spacing_at_entry(path, model);
-  const bool from_markups = !path.frame.empty();
   if (closest < 0 || distance > 1.5 * spacing) {
     const Vec3 x = closest >= 0 ? model.nodes()[closest] : Vec3::Zero();
     throw InputError(p.pointer(from_markups ? "trajectory" : "entry"),
@@ -193,11 +194,7 @@ void place_needle_path(NeedlePath& path, const ModelView& model, const Parameter
                                  "the needle must enter through the surface; {}",
                                  path.entry[0], path.entry[1], path.entry[2], 1e3 * distance, x[0], x[1], x[2],
                                  1e3 * spacing,
-                                 from_markups ? fmt::format("the trajectory's first point, in the mesh's frame ({}{})",
-                                                            path.frame,
-                                                            model.mesh().coordinate_system.empty()
-                                                                ? ": the mesh records none, so taken as it is"
-                                                                : "")
+                                 from_markups ? "the trajectory's first point, in the mesh's frame (" + frame_said + ")"
                                               : std::string("entry is in metres")));
   }
   // Some nodes must lie ahead of the entry, near the axis, within the insertion depth.

@@ -103,7 +103,7 @@ class VtkFileReader final : public MeshSource {
     assign_regions(mesh, grid, region_array, file.label);
     for (const auto& name : node_set_arrays) add_node_set(mesh, grid, name);
     // An mtled result written in millimetres says so (LENGTH_UNIT): back to metres before `scale`.
-    const double file_unit = grid.length_unit == "mm" ? 1e-3 : 1.0;
+    const double file_unit = vtk::metres_per_length_unit(grid, file.label);
     mesh_readers::finish_mesh(mesh, file_unit * parameters_.number("scale"), file.label);
     return mesh;
   }

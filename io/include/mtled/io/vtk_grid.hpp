@@ -65,4 +65,8 @@ double decode_scalar(const unsigned char* data, ScalarType type, bool big_endian
 UnstructuredGrid read_legacy_vtk(const mesh_readers::MeshFileText& file, const ArrayRequest& request);
 UnstructuredGrid read_vtu(const mesh_readers::MeshFileText& file, const ArrayRequest& request);
 
+// Metres per unit of the grid's lengths: 1e-3 for an mtled result written in millimetres (LENGTH_UNIT "mm"), 1 when
+// the file gives no unit; another unit is an InputError naming `label`.
+double metres_per_length_unit(const UnstructuredGrid& grid, const std::string& label);
+
 }  // namespace mtled::vtk
