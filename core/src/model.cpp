@@ -478,9 +478,11 @@ void Model::reduce_thread_forces(std::span<double> f, int thread) const {
 
 // The forces of integration points begin .. end - 1 into f4, in batches of consecutive points with one
 // material. Returns the first inadmissible point, or the largest Index.
-Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
+Index Model::accumulate_forces(Index begin, Index end, double* f4, const std::function<void()>* progress) const {
   constexpr int kCapacity = StressBatch::kCapacity;
+  constexpr Index kPointsBetweenProgress = 2048;  // about a tenth of a millisecond of the kernel
   Index first_bad = std::numeric_limits<Index>::max();
+  Index since_progress = 0;
   StressBatch batch{};
   double P[9][kCapacity];
   double weights[kCapacity];
@@ -499,28 +501,45 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4) const {
     }
     force_kernel::first_piola(batch, weights, P);
     force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, f4);
+    if (progress != nullptr && (since_progress += count) >= kPointsBetweenProgress) {
+      (*progress)();
+      since_progress = 0;
+    }
   }
   return first_bad;
 }
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
   if (volumetric_) return volumetric_->internal_forces(*this, u, f);
-  return internal_forces(u, f, {0, integration_point_count()});
+  const PointRange all{0, integration_point_count()};
+  return internal_forces(u, f, std::span<const PointRange>(&all, 1));
 }
 
-Index Model::internal_forces(std::span<const double> u, std::span<double> f, std::pair<Index, Index> points) const {
-  if (volumetric_) throw std::logic_error("Model::internal_forces over a range of points with a volumetric treatment");
-  const std::int64_t first = points.first, n = points.second - points.first;
+Index Model::internal_forces(std::span<const double> u, std::span<double> f, std::span<const PointRange> ranges,
+                             const std::function<void()>& progress) const {
+  if (volumetric_) throw std::logic_error("Model::internal_forces over ranges of points with a volumetric treatment");
+  std::int64_t n = 0;
+  for (const PointRange& range : ranges) n += range.second - range.first;
   std::vector<Index>& first_bad = thread_first_bad_;
   team_->run([&](int thread) {
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
     std::fill(local.begin(), local.end(), 0.0);
     pad_displacement(u, thread);
     team_->barrier();
-    // Contiguous shares, so that each thread's batches are consecutive points.
+    // Contiguous shares of the ranges' points taken in order, so that each thread's batches are consecutive points.
     const auto [begin, end] = ThreadTeam::share(n, thread, team_->size());
-    first_bad[static_cast<std::size_t>(thread)] =
-        accumulate_forces(static_cast<Index>(first + begin), static_cast<Index>(first + end), local.data());
+    const std::function<void()>* calls = thread == 0 && progress ? &progress : nullptr;
+    Index bad = std::numeric_limits<Index>::max();
+    std::int64_t offset = 0;  // of the current range in the ranges' points taken in order
+    for (const PointRange& range : ranges) {
+      const std::int64_t size = range.second - range.first;
+      const std::int64_t from = std::max<std::int64_t>(begin - offset, 0), to = std::min<std::int64_t>(end - offset, size);
+      if (from < to)
+        bad = std::min(bad, accumulate_forces(static_cast<Index>(range.first + from), static_cast<Index>(range.first + to),
+                                              local.data(), calls));
+      offset += size;
+    }
+    first_bad[static_cast<std::size_t>(thread)] = bad;
     team_->barrier();
     reduce_thread_forces(f, thread);
   });

@@ -4,6 +4,7 @@
 // all in the reference configuration (Total Lagrangian: computed once). Shape-function gradients and
 // support lists are stored contiguously, one row per integration point, in blocks the vectorised force kernel
 // streams (GradientRows).
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -20,6 +21,9 @@
 #include "mtled/thread_team.hpp"
 
 namespace mtled {
+
+// Integration points first .. second - 1.
+using PointRange = std::pair<Index, Index>;
 
 struct SupportStatistics {
   Index min = 0, max = 0;
@@ -48,7 +52,7 @@ class Model {
     RowPrecision precision = RowPrecision::double_precision;
     // Per tet, the group its integration points belong to (empty: one group). The points are numbered group by
     // group (tet order within a group), so that each group's points are one contiguous range: a distributed step
-    // engine gives each process one group (StepEngine::cell_groups).
+    // engine gives each process a run of consecutive groups (StepEngine::cell_groups).
     std::vector<int> cell_groups;
   };
 
@@ -107,10 +111,13 @@ class Model {
   // inadmissible (J <= 0 or not finite); f is then incomplete. Parallel over integration points (the model's
   // ThreadTeam); not re-entrant.
   Index internal_forces(std::span<const double> u, std::span<double> f) const;
-  // The same sum over the integration points [points.first, points.second) only (every node of f is written; the
-  // nodes no point of the range supports get zero). Not with a volumetric treatment, whose averages need every
-  // point.
-  Index internal_forces(std::span<const double> u, std::span<double> f, std::pair<Index, Index> points) const;
+  // The same sum over the integration points of some ranges [first, second) only (every node of f is written; the
+  // nodes no point of the ranges supports get zero); the threads share the ranges' points in order. `progress`,
+  // when given, is called on the calling thread every few thousand of its points (an engine that exchanges data
+  // between processes meanwhile lets its messages move). Not with a volumetric treatment, whose averages need
+  // every point.
+  Index internal_forces(std::span<const double> u, std::span<double> f, std::span<const PointRange> ranges,
+                        const std::function<void()>& progress = {}) const;
   double strain_energy(std::span<const double> u) const;
   // The fewest bytes one internal_forces() call must move through memory: the rows once (padding included; the
   // scatter re-reads them from the cache), each point's weight, mean correction and material, the per-node
@@ -143,7 +150,7 @@ class Model {
   // Team tasks over thread `thread`'s share of the nodes: u into the padded per-node layout the kernel reads (4
   // per node, then the padding node's zeros); the per-thread force buffers summed into f.
   void pad_displacement(std::span<const double> u, int thread) const;
-  Index accumulate_forces(Index begin, Index end, double* f4) const;
+  Index accumulate_forces(Index begin, Index end, double* f4, const std::function<void()>* progress = nullptr) const;
   void reduce_thread_forces(std::span<double> f, int thread) const;
   // Support lists of arbitrary points (at least the shape functions' minimum); throws InputError naming `what`.
   std::vector<std::vector<Index>> find_supports(const std::vector<Vec3>& points, const char* what) const;

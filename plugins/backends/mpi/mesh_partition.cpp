@@ -3,6 +3,7 @@
 #include <metis.h>
 
 #include <algorithm>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -29,6 +30,51 @@ MeshPartition partition_mesh(const TetMesh& mesh, int parts) {
   out.tet_part.assign(epart.begin(), epart.end());
   out.node_part.assign(npart.begin(), npart.end());
   return out;
+}
+
+std::vector<int> boundary_layers(const TetMesh& mesh, const MeshPartition& partition, int layers) {
+  const auto nodes = static_cast<std::size_t>(mesh.node_count());
+  const std::vector<int>& owner = partition.node_part;
+  // The nodes' neighbours along the tets' edges (both directions, duplicates harmless to the search).
+  std::vector<std::size_t> start(nodes + 1, 0);
+  for (const auto& tet : mesh.tets)
+    for (const Index a : tet) start[static_cast<std::size_t>(a) + 1] += 3;
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<Index> neighbour(start.back());
+  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+  for (const auto& tet : mesh.tets)
+    for (const Index a : tet)
+      for (const Index b : tet)
+        if (a != b) neighbour[fill[static_cast<std::size_t>(a)]++] = b;
+  // hops[n]: edges from n to the nearest node another part owns, through nodes of n's own part.
+  std::vector<int> hops(nodes, layers);
+  std::vector<Index> front, next;
+  for (std::size_t n = 0; n < nodes; ++n)
+    for (std::size_t k = start[n]; k < start[n + 1]; ++k)
+      if (owner[static_cast<std::size_t>(neighbour[k])] != owner[n]) {
+        hops[n] = 1;
+        front.push_back(static_cast<Index>(n));
+        break;
+      }
+  for (int distance = 2; distance < layers && !front.empty(); ++distance) {
+    next.clear();
+    for (const Index n : front)
+      for (std::size_t k = start[static_cast<std::size_t>(n)]; k < start[static_cast<std::size_t>(n) + 1]; ++k) {
+        const auto m = static_cast<std::size_t>(neighbour[k]);
+        if (owner[m] == owner[static_cast<std::size_t>(n)] && hops[m] > distance) {
+          hops[m] = distance;
+          next.push_back(static_cast<Index>(m));
+        }
+      }
+    front.swap(next);
+  }
+  std::vector<int> layer(mesh.tets.size(), layers);
+  for (std::size_t t = 0; t < mesh.tets.size(); ++t)
+    for (const Index n : mesh.tets[t]) {
+      const auto i = static_cast<std::size_t>(n);
+      layer[t] = std::min(layer[t], owner[i] != partition.tet_part[t] ? 0 : hops[i]);
+    }
+  return layer;
 }
 
 PartSizes part_sizes(const MeshPartition& partition, std::span<const int> point_part, const GradientRows& rows) {

@@ -18,6 +18,11 @@ struct MeshPartition {
 // Throws std::runtime_error when METIS fails. One part: every tet and node in part 0.
 MeshPartition partition_mesh(const TetMesh& mesh, int parts);
 
+// Per tet: how near its part's boundary it lies, in edges of the mesh from the nearest node another part owns (0:
+// the tet has such a node), `layers` for every tet that far or farther. Numbering a part's points layer by layer
+// puts those whose supports reach other parts' nodes (a support spans a node spacing or two) near the front.
+std::vector<int> boundary_layers(const TetMesh& mesh, const MeshPartition& partition, int layers);
+
 // Per part: its integration points, its ghost nodes (nodes its points' supports reach that another part owns), the
 // nodes it owns, and its neighbours (the parts owning its ghost nodes).
 struct PartSizes {

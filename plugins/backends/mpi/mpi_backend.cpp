@@ -1,7 +1,8 @@
 // `mpi`: one scene on the processes of an MPI run (mpirun -np N mtled run SCENE; the command line selects this
 // backend when it runs on more than one rank). The background cells are partitioned by METIS (the tets' dual graph,
 // faces shared); each rank computes the internal forces of its cells' integration points on its threads, sends its
-// contributions to the nodes other ranks own, sums those it receives for its own nodes in rank order, and every rank
+// contributions to the nodes other ranks own (the points at the partition boundary first, the interior computed
+// while those travel), sums those it receives for its own nodes in rank order, and every rank
 // then gathers the complete force vector. The rest of the step (the update, the needle, the constraint projection,
 // the monitors) runs on every rank on the same complete state, so the ranks agree bitwise on every verdict and only
 // rank 0 writes. docs/mpi.md gives the design, its costs and what it does not distribute yet.
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -65,7 +67,13 @@ class MpiBackend final : public CpuEngine {
     owner_.resize(static_cast<std::size_t>(mesh.node_count()));
     MPI_Bcast(tet_part.data(), static_cast<int>(tet_part.size()), MPI_INT, 0, MPI_COMM_WORLD);
     MPI_Bcast(owner_.data(), static_cast<int>(owner_.size()), MPI_INT, 0, MPI_COMM_WORLD);
-    return std::move(tet_part);
+    // A rank's points in kLayers + 1 groups, the nearest its part's boundary first: its boundary points, computed
+    // before its contributions are sent, are then mostly one range at the front.
+    partition.node_part = owner_;
+    const std::vector<int> layer = boundary_layers(mesh, partition, kLayers);
+    std::vector<int> groups(tet_part.size());
+    for (std::size_t t = 0; t < groups.size(); ++t) groups[t] = tet_part[t] * (kLayers + 1) + layer[t];
+    return groups;
   }
 
   void setup(const Model& model) override {
@@ -77,8 +85,13 @@ class MpiBackend final : public CpuEngine {
       log().warn("mpi: the volumetric treatment's forces are computed whole on every rank (not divided between "
                  "the {} ranks)", ranks_);
     const Index n_points = model.integration_point_count();
-    points_ = rank_ < model.group_count() ? model.group_points(rank_) : std::pair<Index, Index>{n_points, n_points};
+    // This rank's groups (cell_groups); groups past the model's last one are empty.
+    const auto group_start = [&](int group) {
+      return group < model.group_count() ? model.group_points(group).first : n_points;
+    };
+    points_ = {group_start(rank_ * (kLayers + 1)), group_start((rank_ + 1) * (kLayers + 1))};
     build_exchange(model);
+    split_points(model);
     record_partition(model);
   }
 
@@ -95,14 +108,26 @@ class MpiBackend final : public CpuEngine {
   }
 
  protected:
+  // The points whose supports reach other ranks' nodes first, their contributions sent; the interior points while
+  // those travel (the kernel lets MPI move them every few thousand points); then the rank's own sums and the gather.
   Index forces(std::span<const double> u, std::span<double> f) override {
     if (whole_on_every_rank_) return model().internal_forces(u, f);
-    const Index bad = model().internal_forces(u, f, points_);
-    const auto start = Clock::now();
-    exchange(f);
-    std::int64_t first_bad = bad < 0 ? std::numeric_limits<std::int64_t>::max() : bad;
+    auto start = Clock::now();
+    post_receives();
+    exchange_s_ += seconds_since(start);
+    const Index boundary_bad = model().internal_forces(u, boundary_f_, boundary_ranges_);
+    start = Clock::now();
+    send_contributions();
+    exchange_s_ += seconds_since(start);
+    const Index interior_bad = model().internal_forces(u, f, interior_ranges_, progress_);
+    start = Clock::now();
+    MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
+    sum_and_gather(f);
+    std::int64_t first_bad = std::numeric_limits<std::int64_t>::max();
+    for (const Index bad : {boundary_bad, interior_bad})
+      if (bad >= 0) first_bad = std::min<std::int64_t>(first_bad, bad);
     MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
-    exchange_s_ += std::chrono::duration<double>(Clock::now() - start).count();
+    exchange_s_ += seconds_since(start);
     return first_bad == std::numeric_limits<std::int64_t>::max() ? -1 : static_cast<Index>(first_bad);
   }
 
@@ -158,33 +183,67 @@ class MpiBackend final : public CpuEngine {
     requests_.reserve(2 * static_cast<std::size_t>(ranks_));
   }
 
-  // f holds this rank's contributions; afterwards every rank's sum, the same bits on every rank.
-  void exchange(std::span<double> f) {
-    std::vector<MPI_Request>& requests = requests_;  // kept: no allocation in the time step
-    requests.clear();
+  // The boundary points: those whose supports reach a node another rank owns, in blocks of consecutive points
+  // (whole blocks keep the kernel's batches long); the rest of the rank's points are its interior.
+  void split_points(const Model& model) {
+    constexpr Index kBlock = 16;  // two of the kernel's batches (StressBatch::kCapacity)
+    const GradientRows& rows = model.ip_supports();
+    boundary_ranges_.clear();
+    interior_ranges_.clear();
+    boundary_points_ = 0;
+    for (Index block = points_.first; block < points_.second; block += kBlock) {
+      const Index end = std::min(block + kBlock, points_.second);
+      bool boundary = false;
+      for (Index p = block; p < end; ++p) {
+        bool reaches = false;
+        for (int k = 0; k < rows.size(p) && !reaches; ++k) reaches = owner_[static_cast<std::size_t>(rows.node(p, k))] != rank_;
+        boundary_points_ += reaches ? 1 : 0;
+        boundary = boundary || reaches;
+      }
+      auto& ranges = boundary ? boundary_ranges_ : interior_ranges_;
+      if (!ranges.empty() && ranges.back().second == block)
+        ranges.back().second = end;
+      else
+        ranges.emplace_back(block, end);
+    }
+    boundary_f_.assign(3 * static_cast<std::size_t>(model.node_count()), 0.0);
+  }
+
+  void post_receives() {
+    requests_.clear();  // kept: no allocation in the time step
     for (int q = 0; q < ranks_; ++q) {
       auto& in = receive_buffer_[static_cast<std::size_t>(q)];
-      if (!in.empty()) {
-        requests.emplace_back();
-        MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, q, 0, MPI_COMM_WORLD, &requests.back());
-      }
+      if (in.empty()) continue;
+      requests_.emplace_back();
+      MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, q, 0, MPI_COMM_WORLD, &requests_.back());
     }
+  }
+
+  // The boundary points' contributions to the nodes each other rank owns.
+  void send_contributions() {
     for (int q = 0; q < ranks_; ++q) {
       const auto& list = send_nodes_[static_cast<std::size_t>(q)];
       auto& out = send_buffer_[static_cast<std::size_t>(q)];
       if (list.empty()) continue;
       for (std::size_t k = 0; k < list.size(); ++k)
-        for (std::size_t c = 0; c < 3; ++c) out[3 * k + c] = f[3 * static_cast<std::size_t>(list[k]) + c];
-      requests.emplace_back();
-      MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, q, 0, MPI_COMM_WORLD, &requests.back());
+        for (std::size_t c = 0; c < 3; ++c) out[3 * k + c] = boundary_f_[3 * static_cast<std::size_t>(list[k]) + c];
+      requests_.emplace_back();
+      MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, q, 0, MPI_COMM_WORLD, &requests_.back());
     }
-    MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE);
+  }
+
+  // f holds this rank's interior contributions, boundary_f_ its boundary ones, the receive buffers the other
+  // ranks'; afterwards f is every rank's sum, the same bits on every rank.
+  void sum_and_gather(std::span<double> f) {
     // Each owned node's sum in rank order, whatever order the messages came in: the same answer on every repeat.
     std::fill(owned_sum_.begin(), owned_sum_.end(), 0.0);
     for (int q = 0; q < ranks_; ++q) {
       if (q == rank_) {
         for (std::size_t k = 0; k < owned_.size(); ++k)
-          for (std::size_t c = 0; c < 3; ++c) owned_sum_[3 * k + c] += f[3 * static_cast<std::size_t>(owned_[k]) + c];
+          for (std::size_t c = 0; c < 3; ++c) {
+            const std::size_t d = 3 * static_cast<std::size_t>(owned_[k]) + c;
+            owned_sum_[3 * k + c] += boundary_f_[d] + f[d];
+          }
         continue;
       }
       const auto& list = receive_nodes_[static_cast<std::size_t>(q)];
@@ -200,6 +259,10 @@ class MpiBackend final : public CpuEngine {
       for (std::size_t c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(gather_order_[k]) + c] = gathered_[3 * k + c];
   }
 
+  static double seconds_since(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+  }
+
   // summary.json's "partition": points, owned and ghost nodes per rank, the imbalance, the bytes exchanged.
   void record_partition(const Model& model) {
     std::int64_t ghosts = 0;
@@ -207,6 +270,10 @@ class MpiBackend final : public CpuEngine {
     const auto points = all_ranks(points_.second - points_.first, ranks_);
     const auto ghost_nodes = all_ranks(ghosts, ranks_);
     const auto owned = all_ranks(static_cast<std::int64_t>(owned_.size()), ranks_);
+    const auto boundary = all_ranks(boundary_points_, ranks_);
+    std::int64_t first = 0;
+    for (const PointRange& range : boundary_ranges_) first += range.second - range.first;
+    const auto before_sending = all_ranks(first, ranks_);
     const double mean = static_cast<double>(model.integration_point_count()) / ranks_;
     const std::int64_t most = *std::max_element(points.begin(), points.end());
     const std::int64_t sent = std::accumulate(ghost_nodes.begin(), ghost_nodes.end(), std::int64_t{0});
@@ -214,13 +281,16 @@ class MpiBackend final : public CpuEngine {
                   {"integration_points", points},
                   {"owned_nodes", owned},
                   {"ghost_nodes", ghost_nodes},
+                  {"boundary_points", boundary},
+                  {"points_before_sending", before_sending},
                   {"imbalance", mean > 0.0 ? static_cast<double>(most) / mean : 1.0},
                   {"halo_bytes_per_evaluation", 24 * sent},
                   {"gather_bytes_per_evaluation", 24 * model.node_count() * (ranks_ - 1)}};
   }
 
+  static constexpr int kLayers = 4;  // edges from the boundary told apart; a support spans one or two
   int rank_ = 0, ranks_ = 1;
-  std::pair<Index, Index> points_{0, 0};
+  PointRange points_{0, 0};
   std::vector<int> owner_;  // per node: the rank that sums its force
   std::vector<std::vector<Index>> send_nodes_, receive_nodes_;
   std::vector<std::vector<double>> send_buffer_, receive_buffer_;
@@ -228,6 +298,14 @@ class MpiBackend final : public CpuEngine {
   std::vector<int> gather_counts_, gather_offsets_;
   std::vector<double> owned_sum_, gathered_;
   std::vector<MPI_Request> requests_;
+  std::vector<PointRange> boundary_ranges_, interior_ranges_;
+  std::int64_t boundary_points_ = 0;
+  std::vector<double> boundary_f_;  // the boundary points' contributions, every node
+  // Called by the kernel between its interior points: lets MPI move the halo meanwhile.
+  std::function<void()> progress_ = [this] {
+    int done = 0;
+    MPI_Testall(static_cast<int>(requests_.size()), requests_.data(), &done, MPI_STATUSES_IGNORE);
+  };
   json partition_;
   bool whole_on_every_rank_ = false;
   double exchange_s_ = 0.0;
