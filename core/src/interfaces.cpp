@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "explicit_update.hpp"
 #include "mtled/interfaces/backend.hpp"
@@ -25,6 +26,10 @@ BoundaryCondition::~BoundaryCondition() = default;
 NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
 VolumetricTreatment::~VolumetricTreatment() = default;
+Index VolumetricTreatment::internal_forces(const Model&, std::span<const double>, std::span<double>,
+                                           std::span<const PointRange>) {
+  throw std::logic_error("this volumetric treatment sums only over every integration point");
+}
 StepMonitor::~StepMonitor() = default;
 StepControl::~StepControl() = default;
 DiscreteSystem::~DiscreteSystem() = default;

@@ -517,28 +517,24 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f, std::span<const PointRange> ranges,
                              const std::function<void()>& progress) const {
-  if (volumetric_) throw std::logic_error("Model::internal_forces over ranges of points with a volumetric treatment");
-  std::int64_t n = 0;
-  for (const PointRange& range : ranges) n += range.second - range.first;
+  if (volumetric_) {
+    if (!volumetric_->sums_over_ranges())
+      throw std::logic_error("Model::internal_forces over ranges of points with a volumetric treatment that sums "
+                             "only over every point");
+    return volumetric_->internal_forces(*this, u, f, ranges);
+  }
   std::vector<Index>& first_bad = thread_first_bad_;
   team_->run([&](int thread) {
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
     std::fill(local.begin(), local.end(), 0.0);
     pad_displacement(u, thread);
     team_->barrier();
-    // Contiguous shares of the ranges' points taken in order, so that each thread's batches are consecutive points.
-    const auto [begin, end] = ThreadTeam::share(n, thread, team_->size());
+    // Contiguous shares of the ranges' points, so that each thread's batches are consecutive points.
     const std::function<void()>* calls = thread == 0 && progress ? &progress : nullptr;
     Index bad = std::numeric_limits<Index>::max();
-    std::int64_t offset = 0;  // of the current range in the ranges' points taken in order
-    for (const PointRange& range : ranges) {
-      const std::int64_t size = range.second - range.first;
-      const std::int64_t from = std::max<std::int64_t>(begin - offset, 0), to = std::min<std::int64_t>(end - offset, size);
-      if (from < to)
-        bad = std::min(bad, accumulate_forces(static_cast<Index>(range.first + from), static_cast<Index>(range.first + to),
-                                              local.data(), calls));
-      offset += size;
-    }
+    for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
+      bad = std::min(bad, accumulate_forces(begin, end, local.data(), calls));
+    });
     first_bad[static_cast<std::size_t>(thread)] = bad;
     team_->barrier();
     reduce_thread_forces(f, thread);
@@ -548,8 +544,12 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f, std
 }
 
 Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F) const {
-  const Index n = integration_point_count();
-  const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
+  const PointRange all{0, integration_point_count()};
+  return deformation_gradients(u, F, std::span<const PointRange>(&all, 1));
+}
+
+Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F,
+                                   std::span<const PointRange> ranges) const {
   std::vector<Index>& first_bad = thread_first_bad_;
   team_->run([&](int thread) {
     Index& thread_bad = first_bad[static_cast<std::size_t>(thread)];
@@ -557,38 +557,42 @@ Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F)
     pad_displacement(u, thread);
     team_->barrier();
     StressBatch batch{};
-    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, team_->size());
-    for (auto b = batch_begin; b < batch_end; ++b) {
-      const auto first = static_cast<Index>(b * StressBatch::kCapacity);
-      batch.count = std::min<Index>(StressBatch::kCapacity, n - first);
-      force_kernel::gather(ip_rows_, padded_u_.data(), first, n, batch);
-      for (int p = 0; p < batch.count; ++p) {
-        F[first + p] = batch.deformation_gradient(p);
-        const double J = F[first + p].determinant();
-        if (!(J > 0.0) || !std::isfinite(J) || !F[first + p].allFinite()) thread_bad = std::min(thread_bad, first + p);
+    for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
+      for (Index first = begin; first < end; first += batch.count) {
+        batch.count = std::min<Index>(StressBatch::kCapacity, end - first);
+        force_kernel::gather(ip_rows_, padded_u_.data(), first, end, batch);
+        for (int p = 0; p < batch.count; ++p) {
+          F[first + p] = batch.deformation_gradient(p);
+          const double J = F[first + p].determinant();
+          if (!(J > 0.0) || !std::isfinite(J) || !F[first + p].allFinite()) thread_bad = std::min(thread_bad, first + p);
+        }
       }
-    }
+    });
   });
   const Index bad = *std::min_element(first_bad.begin(), first_bad.end());
   return bad == std::numeric_limits<Index>::max() ? -1 : bad;
 }
 
 void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f) const {
-  const Index n = integration_point_count();
-  const Index batches = (n + StressBatch::kCapacity - 1) / StressBatch::kCapacity;
+  const PointRange all{0, integration_point_count()};
+  scatter_stresses(weighted_stress, f, std::span<const PointRange>(&all, 1));
+}
+
+void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f,
+                             std::span<const PointRange> ranges) const {
   team_->run([&](int thread) {
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
     std::fill(local.begin(), local.end(), 0.0);
     double P[9][StressBatch::kCapacity];
     const bool skip[StressBatch::kCapacity] = {};
-    const auto [batch_begin, batch_end] = ThreadTeam::share(batches, thread, team_->size());
-    for (auto b = batch_begin; b < batch_end; ++b) {
-      const auto first = static_cast<Index>(b * StressBatch::kCapacity);
-      const int count = std::min<Index>(StressBatch::kCapacity, n - first);
-      for (int p = 0; p < count; ++p)
-        for (int c = 0; c < 9; ++c) P[c][p] = weighted_stress[first + p](c / 3, c % 3);
-      force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, local.data());
-    }
+    for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
+      for (Index first = begin; first < end; first += StressBatch::kCapacity) {
+        const int count = std::min<Index>(StressBatch::kCapacity, end - first);
+        for (int p = 0; p < count; ++p)
+          for (int c = 0; c < 9; ++c) P[c][p] = weighted_stress[first + p](c / 3, c % 3);
+        force_kernel::scatter(ip_rows_, xi_.data(), xi_mean_.data(), first, count, P, skip, local.data());
+      }
+    });
     team_->barrier();
     reduce_thread_forces(f, thread);
   });

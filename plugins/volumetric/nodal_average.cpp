@@ -4,7 +4,8 @@
 // J_I, the weighted mean J of the points in the tets around node I. One point per tet and about five tets per node
 // impose J = 1 about five times per node against three unknowns: the classic volumetric locking of nearly
 // incompressible materials, which the averaging relieves. The forces are the exact gradient of
-// E = sum_q w_q W(F_bar_q), so energy is conserved and the stiffness is symmetric.
+// E = sum_q w_q W(F_bar_q), so energy is conserved and the stiffness is symmetric. It sums over ranges of points
+// too (an MPI rank's share): a point's stress then comes from the two layers of points around it (Region).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -56,33 +57,46 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   // shared by q's and p's tets of (1/4) w_p / W_I times J_p F_p^-T. Summed over q: point p carries the extra
   // stress w_p (sum over its tet's vertices I of Pi_I) J_p F_p^-T with Pi_I = (1/4) sum_q pi_q / W_I.
   Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f) override {
-    if (const Index bad = averaged_dilatation(model, u); bad >= 0) return bad;
-    const Index n = model.integration_point_count();
+    const PointRange all{0, model.integration_point_count()};
+    return internal_forces(model, u, f, std::span<const PointRange>(&all, 1));
+  }
+
+  bool sums_over_ranges() const override { return true; }
+
+  Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f,
+                        std::span<const PointRange> ranges) override {
+    const Region& region = region_of(model, ranges);
+    if (const Index bad = averaged_dilatation(model, u, region); bad >= 0) return bad;
     const auto& weight = model.ip_weights();
+    const int threads = model.team().size();
     model.team().run([&](int thread) {
-      const auto [begin, end] = ThreadTeam::share(n, thread, model.team().size());
       Index& thread_bad = first_bad_[static_cast<std::size_t>(thread)];
       thread_bad = kNone;
-      local_stresses(model, static_cast<Index>(begin), static_cast<Index>(end), thread_bad);
+      for_each_piece_of_share(region.near, thread, threads,
+                              [&](Index begin, Index end) { local_stresses(model, begin, end, thread_bad); });
       model.team().barrier();
-      average_at_nodes(model, pressure_, /*weighted=*/false, thread);
+      average_at_nodes(model, pressure_, /*weighted=*/false, region.own_vertices, thread);
       model.team().barrier();
       const auto& tets = model.mesh().tets;
       const auto& ip_tet = model.ip_tets();
-      for (auto ip = static_cast<Index>(begin); ip < end; ++ip) {
-        const auto& tet = tets[ip_tet[ip]];
-        const double pressure = node_value_[tet[0]] + node_value_[tet[1]] + node_value_[tet[2]] + node_value_[tet[3]];
-        stress_[ip] += (weight[ip] * pressure) * cofactor_[ip];
-      }
+      for_each_piece_of_share(region.own, thread, threads, [&](Index begin, Index end) {
+        for (Index ip = begin; ip < end; ++ip) {
+          const auto& tet = tets[ip_tet[ip]];
+          const double pressure = node_value_[tet[0]] + node_value_[tet[1]] + node_value_[tet[2]] + node_value_[tet[3]];
+          stress_[ip] += (weight[ip] * pressure) * cofactor_[ip];
+        }
+      });
     });
     const Index bad = *std::min_element(first_bad_.begin(), first_bad_.end());
     if (bad != kNone) return bad;
-    model.scatter_stresses(stress_, f);
+    model.scatter_stresses(stress_, f, region.own);
     return -1;
   }
 
   double strain_energy(const Model& model, std::span<const double> u) override {
-    if (averaged_dilatation(model, u) >= 0) return std::numeric_limits<double>::quiet_NaN();
+    const PointRange all{0, model.integration_point_count()};
+    if (averaged_dilatation(model, u, region_of(model, std::span<const PointRange>(&all, 1))) >= 0)
+      return std::numeric_limits<double>::quiet_NaN();
     double energy = 0.0;
     for (Index ip = 0; ip < model.integration_point_count(); ++ip)
       energy += model.ip_weights()[ip] * model.ip_material(ip).energy(std::cbrt(J_bar_[ip] / J_[ip]) * F_[ip]);
@@ -91,6 +105,67 @@ class NodalAverageTreatment final : public VolumetricTreatment {
 
  private:
   static constexpr Index kNone = std::numeric_limits<Index>::max();
+
+  // What the forces of some points (`own`) need: their stresses need Pi at their tets' vertices (`own_vertices`),
+  // which sums the pressures of every point around those vertices (`near`, the own points among them); those
+  // pressures need J_bar at the near points, the average of J at their tets' vertices (`near_vertices`), which sums
+  // J over every point around them (`far`). Each sum runs over all of a node's points in point order, as for the
+  // whole model, so a point's stress does not depend on which ranges it is computed with.
+  struct Region {
+    std::vector<PointRange> own, near, far;
+    std::vector<Index> own_vertices, near_vertices;
+  };
+
+  const Region& region_of(const Model& model, std::span<const PointRange> ranges) {
+    for (const auto& [key, region] : regions_)
+      if (std::equal(key.begin(), key.end(), ranges.begin(), ranges.end())) return region;
+    if (regions_.size() >= 4) regions_.clear();  // an engine uses one or two lists of ranges, fixed for the run
+    const auto& tets = model.mesh().tets;
+    const auto& ip_tet = model.ip_tets();
+    const auto points = static_cast<std::size_t>(model.integration_point_count());
+    const auto nodes = static_cast<std::size_t>(model.node_count());
+    Region region;
+    region.own.assign(ranges.begin(), ranges.end());
+    // The vertices of the marked points' tets, then every point around those vertices.
+    const auto vertices_of = [&](const std::vector<char>& point_marked) {
+      std::vector<char> node_marked(nodes, 0);
+      for (std::size_t ip = 0; ip < points; ++ip)
+        if (point_marked[ip])
+          for (const Index v : tets[ip_tet[ip]]) node_marked[static_cast<std::size_t>(v)] = 1;
+      std::vector<Index> list;
+      for (std::size_t v = 0; v < nodes; ++v)
+        if (node_marked[v]) list.push_back(static_cast<Index>(v));
+      return list;
+    };
+    const auto points_around = [&](const std::vector<Index>& vertices) {
+      std::vector<char> marked(points, 0);
+      for (const Index v : vertices)
+        for (std::int64_t k = node_points_.offsets[v]; k < node_points_.offsets[v + 1]; ++k)
+          marked[static_cast<std::size_t>(node_points_.nodes[k])] = 1;
+      return marked;
+    };
+    std::vector<char> own(points, 0);
+    for (const PointRange& range : ranges) std::fill(own.begin() + range.first, own.begin() + range.second, 1);
+    region.own_vertices = vertices_of(own);
+    const std::vector<char> near = points_around(region.own_vertices);
+    region.near = as_ranges(near);
+    region.near_vertices = vertices_of(near);
+    region.far = as_ranges(points_around(region.near_vertices));
+    regions_.emplace_back(std::vector<PointRange>(ranges.begin(), ranges.end()), std::move(region));
+    return regions_.back().second;
+  }
+
+  static std::vector<PointRange> as_ranges(const std::vector<char>& marked) {
+    std::vector<PointRange> out;
+    for (std::size_t ip = 0; ip < marked.size(); ++ip) {
+      if (!marked[ip]) continue;
+      if (!out.empty() && out.back().second == static_cast<Index>(ip))
+        ++out.back().second;
+      else
+        out.emplace_back(static_cast<Index>(ip), static_cast<Index>(ip) + 1);
+    }
+    return out;
+  }
 
   // The local part of each point's stress and its pressure (see internal_forces) for points begin .. end - 1,
   // the material law called on batches of consecutive points with one material (its vectorised stress_batch).
@@ -130,38 +205,43 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     }
   }
 
-  // F, J, J F^-T and J_bar at every integration point; -1, or the first inadmissible point.
-  Index averaged_dilatation(const Model& model, std::span<const double> u) {
-    if (const Index bad = model.deformation_gradients(u, F_); bad >= 0) return bad;
-    const Index n = model.integration_point_count();
+  // F, J and J F^-T at the region's far points, J_bar at its near points; -1, or the first inadmissible point.
+  Index averaged_dilatation(const Model& model, std::span<const double> u, const Region& region) {
+    if (const Index bad = model.deformation_gradients(u, F_, region.far); bad >= 0) return bad;
+    const int threads = model.team().size();
     model.team().run([&](int thread) {
-      const auto [begin, end] = ThreadTeam::share(n, thread, model.team().size());
-      for (auto ip = begin; ip < end; ++ip) {
-        J_[ip] = F_[ip].determinant();
-        cofactor_[ip] = J_[ip] * F_[ip].inverse().transpose();
-      }
+      for_each_piece_of_share(region.far, thread, threads, [&](Index begin, Index end) {
+        for (Index ip = begin; ip < end; ++ip) {
+          J_[ip] = F_[ip].determinant();
+          cofactor_[ip] = J_[ip] * F_[ip].inverse().transpose();
+        }
+      });
       model.team().barrier();
-      average_at_nodes(model, J_, /*weighted=*/true, thread);
+      average_at_nodes(model, J_, /*weighted=*/true, region.near_vertices, thread);
       model.team().barrier();
       const auto& tets = model.mesh().tets;
       const auto& ip_tet = model.ip_tets();
-      for (auto ip = begin; ip < end; ++ip) {
-        const auto& tet = tets[ip_tet[ip]];
-        J_bar_[ip] = 0.25 * (node_value_[tet[0]] + node_value_[tet[1]] + node_value_[tet[2]] + node_value_[tet[3]]);
-      }
+      for_each_piece_of_share(region.near, thread, threads, [&](Index begin, Index end) {
+        for (Index ip = begin; ip < end; ++ip) {
+          const auto& tet = tets[ip_tet[ip]];
+          J_bar_[ip] = 0.25 * (node_value_[tet[0]] + node_value_[tet[1]] + node_value_[tet[2]] + node_value_[tet[3]]);
+        }
+      });
     });
     return -1;
   }
 
   // node_value_[I] = sum over the points p around I of (w_p if weighted) value_p / W_I (times 1/4 if not
-  // weighted: each point's value is spread over its tet's four vertices), over thread `thread`'s share of nodes.
-  void average_at_nodes(const Model& model, const std::vector<double>& value, bool weighted, int thread) {
+  // weighted: each point's value is spread over its tet's four vertices), for thread `thread`'s share of `nodes`.
+  void average_at_nodes(const Model& model, const std::vector<double>& value, bool weighted,
+                        const std::vector<Index>& nodes, int thread) {
     const auto& weight = model.ip_weights();
-    const auto [begin, end] = ThreadTeam::share(model.node_count(), thread, model.team().size());
-    for (auto node = begin; node < end; ++node) {
+    const auto [begin, end] = ThreadTeam::share(static_cast<std::int64_t>(nodes.size()), thread, model.team().size());
+    for (auto k = begin; k < end; ++k) {
+      const Index node = nodes[static_cast<std::size_t>(k)];
       double sum = 0.0;
-      for (std::int64_t k = node_points_.offsets[node]; k < node_points_.offsets[node + 1]; ++k) {
-        const Index ip = node_points_.nodes[k];
+      for (std::int64_t e = node_points_.offsets[node]; e < node_points_.offsets[node + 1]; ++e) {
+        const Index ip = node_points_.nodes[e];
         sum += weighted ? weight[ip] * value[ip] : value[ip];
       }
       node_value_[node] = (weighted ? 1.0 : 0.25) * sum / node_weight_[node];
@@ -173,6 +253,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   std::vector<Mat3> F_, cofactor_, stress_;  // per integration point
   std::vector<double> J_, J_bar_, pressure_, node_value_;
   std::vector<Index> first_bad_;  // per thread of the model's team
+  std::vector<std::pair<std::vector<PointRange>, Region>> regions_;  // by the ranges they serve
 };
 
 }  // namespace mtled

@@ -113,6 +113,29 @@ TEST_P(MpiRun, TheCubeIsTheOneProcessAnswerAndTheSameOnARepeat) {
   EXPECT_EQ(test::read_text(several / "reactions.csv"), test::read_text(again / "reactions.csv"));
 }
 
+// The averaged dilatation (nodal_average) is divided too: each rank evaluates its own points and the layers of
+// other ranks' points their averages reach. Bound as above.
+TEST_P(MpiRun, TheAveragedDilatationIsDividedAndIsTheOneProcessAnswer) {
+  const int ranks = GetParam();
+  const std::string name = "averaged_on_" + std::to_string(ranks);
+  json scene = json::parse(test::read_text(needle_scene(name)));
+  scene["volumetric"] = {{"type", "nodal_average"}};
+  const fs::path file = needle_scene(name);
+  test::write_text(file, scene.dump(2));
+  const fs::path one = folder(name + "_serial"), several = folder(name);
+  const auto serial = run(file, one, 0);
+  ASSERT_EQ(serial.exit_code, 0) << serial.output;
+  const auto parallel = run(file, several, ranks);
+  ASSERT_EQ(parallel.exit_code, 0) << parallel.output;
+  EXPECT_EQ(parallel.output.find("whole on every rank"), std::string::npos) << parallel.output;
+  const json a = test::read_json(one / "summary.json"), b = test::read_json(several / "summary.json");
+  EXPECT_FALSE(b["backend"].contains("forces")) << b["backend"].dump();
+  EXPECT_EQ(a["steps"], b["steps"]);
+  const double fa = a["needle"]["final_force_N"], fb = b["needle"]["final_force_N"];
+  EXPECT_NEAR(fb, fa, 1e-12 * fa);
+  EXPECT_LE(largest_nrmse(several, one), 1e-12);
+}
+
 INSTANTIATE_TEST_SUITE_P(Ranks, MpiRun, ::testing::Values(2, 3));
 
 TEST(MpiFailure, OneFailingRankEndsTheRunWithAnErrorNotAHang) {

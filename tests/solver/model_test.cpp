@@ -254,42 +254,48 @@ TEST(Model, ForcesDoNotDependOnTheThreadCount) {
 
 // The sum over ranges of points (what the mpi backend computes, the points at a partition boundary and the rest in
 // two calls): two complementary lists of ranges, one of them out of order and ending mid-batch, add up to the
-// whole sum on one and on two threads; the progress call comes only from the calling thread, between points.
-// Bound: the same terms summed in another grouping (a few ulps of the largest force).
+// whole sum on one and on two threads, with and without the averaged dilatation (whose points' stresses need the
+// points around them, inside the ranges or not); the progress call comes only from the calling thread, between
+// points. Bound: the same terms summed in another grouping (a few ulps of the largest force).
 TEST(Model, ForcesOverRangesOfPointsAddUpToTheWhole) {
-  for (const int threads : {1, 2}) {
-    const int saved = omp_get_max_threads();
-    omp_set_num_threads(threads);
-    const auto model = make_model("mmls", 0.3, 18, "ogden");
-    omp_set_num_threads(saved);
-    const Index n = model->integration_point_count();
-    ASSERT_GT(n, 14 * 2048) << "too few points for the progress calls to be tested";
-    const auto u = random_field(model->node_count(), 5e-5, 17);  // a spacing of 0.6 mm
-    std::vector<double> whole(u.size()), first(u.size(), 1.0), second(u.size(), 1.0);
-    ASSERT_EQ(model->internal_forces(u, whole), -1);
-    const std::vector<PointRange> some = {{n / 2 + 3, n - 5}, {0, n / 5}};
-    const std::vector<PointRange> rest = {{n / 5, n / 2 + 3}, {n - 5, n}};
-    int calls = 0;
-    const auto caller = std::this_thread::get_id();
-    bool other_thread = false;
-    ASSERT_EQ(model->internal_forces(u, first, some), -1);
-    ASSERT_EQ(model->internal_forces(u, second, rest, [&] {
-      ++calls;
-      other_thread = other_thread || std::this_thread::get_id() != caller;
-    }), -1);
-    double difference = 0.0;
-    for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(first[i] + second[i] - whole[i]));
-    EXPECT_LE(difference, 1e-13 * max_abs(whole)) << threads << " threads";
-    // The calling thread's share of `rest` (about half of it on two threads) in steps of 2,048 points.
-    const Index share = (n / 2 + 3 - n / 5 + 5) / threads;
-    EXPECT_GE(calls, share / 2048 - 1) << threads << " threads";
-    EXPECT_LE(calls, share / 2048 + 1) << threads << " threads";
-    EXPECT_FALSE(other_thread);
-    // A range's points alone: a node no point of the range supports gets zero, not what f held.
-    std::vector<double> none(u.size(), 1.0);
-    ASSERT_EQ(model->internal_forces(u, none, std::vector<PointRange>{}), -1);
-    EXPECT_EQ(max_abs(none), 0.0);
-  }
+  for (const bool nodal_average : {false, true})
+    for (const int threads : {1, 2}) {
+      const int saved = omp_get_max_threads();
+      omp_set_num_threads(threads);
+      const auto model = make_model("mmls", 0.3, 18, "ogden", true, nodal_average);
+      omp_set_num_threads(saved);
+      const std::string label = std::to_string(threads) + " threads, nodal_average " + std::to_string(nodal_average);
+      const Index n = model->integration_point_count();
+      ASSERT_GT(n, 14 * 2048) << "too few points for the progress calls to be tested";
+      const auto u = random_field(model->node_count(), 5e-5, 17);  // a spacing of 0.6 mm
+      std::vector<double> whole(u.size()), first(u.size(), 1.0), second(u.size(), 1.0);
+      ASSERT_EQ(model->internal_forces(u, whole), -1);
+      const std::vector<PointRange> some = {{n / 2 + 3, n - 5}, {0, n / 5}};
+      const std::vector<PointRange> rest = {{n / 5, n / 2 + 3}, {n - 5, n}};
+      int calls = 0;
+      const auto caller = std::this_thread::get_id();
+      bool other_thread = false;
+      ASSERT_EQ(model->internal_forces(u, first, some), -1);
+      ASSERT_EQ(model->internal_forces(u, second, rest, [&] {
+        ++calls;
+        other_thread = other_thread || std::this_thread::get_id() != caller;
+      }), -1);
+      double difference = 0.0;
+      for (std::size_t i = 0; i < u.size(); ++i)
+        difference = std::max(difference, std::abs(first[i] + second[i] - whole[i]));
+      EXPECT_LE(difference, 1e-13 * max_abs(whole)) << label;
+      EXPECT_GT(max_abs(first), 0.1 * max_abs(whole)) << label;
+      // A range's points alone: a node no point of the range supports gets zero, not what f held.
+      std::vector<double> none(u.size(), 1.0);
+      ASSERT_EQ(model->internal_forces(u, none, std::vector<PointRange>{}), -1);
+      EXPECT_EQ(max_abs(none), 0.0) << label;
+      if (nodal_average) continue;  // the treatment's passes take no progress call
+      // The calling thread's share of `rest` (about half of it on two threads) in steps of 2,048 points.
+      const Index share = (n / 2 + 3 - n / 5 + 5) / threads;
+      EXPECT_GE(calls, share / 2048 - 1) << label;
+      EXPECT_LE(calls, share / 2048 + 1) << label;
+      EXPECT_FALSE(other_thread);
+    }
 }
 
 // The vectorised kernel on every instruction set this CPU has, and on the portable baseline, against the

@@ -22,9 +22,6 @@
 
 namespace mtled {
 
-// Integration points first .. second - 1.
-using PointRange = std::pair<Index, Index>;
-
 struct SupportStatistics {
   Index min = 0, max = 0;
   double mean = 0.0;
@@ -111,11 +108,11 @@ class Model {
   // inadmissible (J <= 0 or not finite); f is then incomplete. Parallel over integration points (the model's
   // ThreadTeam); not re-entrant.
   Index internal_forces(std::span<const double> u, std::span<double> f) const;
-  // The same sum over the integration points of some ranges [first, second) only (every node of f is written; the
-  // nodes no point of the ranges supports get zero); the threads share the ranges' points in order. `progress`,
+  // The contributions of the integration points of some ranges [first, second) only (every node of f is written;
+  // the nodes no point of the ranges supports get zero); the threads share the ranges' points in order. `progress`,
   // when given, is called on the calling thread every few thousand of its points (an engine that exchanges data
-  // between processes meanwhile lets its messages move). Not with a volumetric treatment, whose averages need
-  // every point.
+  // between processes meanwhile lets its messages move). With a volumetric treatment, its own sum over the ranges
+  // (VolumetricTreatment::sums_over_ranges; std::logic_error for one that does not).
   Index internal_forces(std::span<const double> u, std::span<double> f, std::span<const PointRange> ranges,
                         const std::function<void()>& progress = {}) const;
   double strain_energy(std::span<const double> u) const;
@@ -130,8 +127,12 @@ class Model {
   // F at every integration point (NaN-free; returns -1 or the lowest-numbered inadmissible point), and
   // f_I = sum_ip s_ip (grad N_I + gradient_correction(ip, I)) from per-point stresses s_ip already multiplied
   // by the point's weight.
+  // Both over the points of some ranges only (F and the stresses indexed by point; f's other contributions zero).
   Index deformation_gradients(std::span<const double> u, std::span<Mat3> F) const;
+  Index deformation_gradients(std::span<const double> u, std::span<Mat3> F, std::span<const PointRange> ranges) const;
   void scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f) const;
+  void scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f,
+                        std::span<const PointRange> ranges) const;
   Mat3 deformation_gradient(Index ip, std::span<const double> u) const;
   // Interpolated displacement at every node: u(X_J) = sum_I N_I(X_J) u_I.
   void interpolate(std::span<const double> u, std::span<double> out) const;

@@ -78,12 +78,14 @@ class MpiBackend final : public CpuEngine {
 
   void setup(const Model& model) override {
     CpuEngine::setup(model);
-    // A volumetric treatment's averages need F at the points around each node, which the treatment interface
-    // computes over every point: each rank then computes the whole force itself (the same answer, no speed-up).
-    whole_on_every_rank_ = model.volumetric_treatment() != nullptr;
+    // A volumetric treatment that sums over ranges of points computes its own points' contributions (their averages
+    // reach a few layers of other ranks' points, which it evaluates too); one that does not is computed whole on
+    // every rank (the same answer, no speed-up).
+    const VolumetricTreatment* treatment = model.volumetric_treatment();
+    whole_on_every_rank_ = treatment != nullptr && !treatment->sums_over_ranges();
     if (whole_on_every_rank_ && rank_ == 0)
       log().warn("mpi: the volumetric treatment's forces are computed whole on every rank (not divided between "
-                 "the {} ranks)", ranks_);
+                 "the {} ranks): it does not sum over ranges of points", ranks_);
     const Index n_points = model.integration_point_count();
     // This rank's groups (cell_groups); groups past the model's last one are empty.
     const auto group_start = [&](int group) {
@@ -119,7 +121,11 @@ class MpiBackend final : public CpuEngine {
     start = Clock::now();
     send_contributions();
     exchange_s_ += seconds_since(start);
-    const Index interior_bad = model().internal_forces(u, f, interior_ranges_, progress_);
+    Index interior_bad = -1;
+    if (interior_ranges_.empty())
+      std::fill(f.begin(), f.end(), 0.0);
+    else
+      interior_bad = model().internal_forces(u, f, interior_ranges_, progress_);
     start = Clock::now();
     MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
     sum_and_gather(f);
@@ -200,7 +206,9 @@ class MpiBackend final : public CpuEngine {
         boundary_points_ += reaches ? 1 : 0;
         boundary = boundary || reaches;
       }
-      auto& ranges = boundary ? boundary_ranges_ : interior_ranges_;
+      // With a volumetric treatment every point goes first: its averages reach past the boundary points, so the
+      // interior would evaluate them again.
+      auto& ranges = boundary || model.volumetric_treatment() != nullptr ? boundary_ranges_ : interior_ranges_;
       if (!ranges.empty() && ranges.back().second == block)
         ranges.back().second = end;
       else

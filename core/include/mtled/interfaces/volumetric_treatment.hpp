@@ -25,6 +25,15 @@ class VolumetricTreatment {
   // Internal nodal forces f = dE/du for nodal parameters u (3 per node), E the treatment's discrete strain
   // energy. Returns -1, or the lowest-numbered integration point whose F is inadmissible (f is then incomplete).
   virtual Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f) = 0;
+  // Whether the treatment sums over ranges of points (below): an engine that shares the points between processes
+  // then has each compute its own points' contributions; otherwise every process computes the whole sum (the same
+  // answer, not divided).
+  virtual bool sums_over_ranges() const { return false; }
+  // The contributions of the integration points of `ranges` only (every node of f written), each point's stress
+  // as in the whole sum: its averages over every point they involve, inside the ranges or not. Returns -1, or the
+  // lowest-numbered inadmissible point among those evaluated. The default throws std::logic_error.
+  virtual Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f,
+                                std::span<const PointRange> ranges);
   // E(u); NaN when some F is inadmissible.
   virtual double strain_energy(const Model& model, std::span<const double> u) = 0;
 };
