@@ -5,7 +5,8 @@
 //
 // RUN_FOLDER: a one-process run of the same scene (its summary.json: the force kernel's time per evaluation, the
 // steps and evaluations, the solve time). Prints one row per part count: integration points per part (the largest
-// over the mean: the imbalance), ghost nodes per part (mean and largest), neighbours, the bytes a rank sends and
+// over the mean: the imbalance), ghost nodes per part (mean and largest), the largest share of boundary points
+// (whose supports reach a ghost node: computed before the halo is sent), neighbours, the bytes a rank sends and
 // receives per force evaluation (halo: 24 per ghost node; gather: 24 per node it does not own), and the projected
 // time per step on that many ranks of the run's threads (the model: docs/mpi.md).
 #include <fmt/format.h>
@@ -87,9 +88,10 @@ int study(int argc, char** argv) {
              "evaluations per step, the rest {:.3f} ms per step; network assumed {:.1f} us, {:.1f} GB/s\n",
              positional[0], model.node_count(), model.integration_point_count(), costs.kernel_s * 1e3,
              costs.evaluations_per_step, costs.rest_per_step_s * 1e3, latency_s * 1e6, bandwidth / 1e9);
-  fmt::print("| parts | imbalance | ghost nodes per part (mean / largest) | neighbours (largest) | halo KB sent per "
-             "evaluation (largest rank) | gather KB received per evaluation | projected ms per step | speed-up |\n");
-  fmt::print("| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  fmt::print("| parts | imbalance | ghost nodes per part (mean / largest) | boundary points (largest share) | neighbours "
+             "(largest) | halo KB sent per evaluation (largest rank) | gather KB received per evaluation | projected "
+             "ms per step | speed-up |\n");
+  fmt::print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   const double one_rank = costs.evaluations_per_step * costs.kernel_s + costs.rest_per_step_s;
   for (const int n : parts) {
     const MeshPartition partition = partition_mesh(model.mesh(), n);
@@ -103,13 +105,22 @@ int study(int argc, char** argv) {
     const int neighbours = *std::max_element(sizes.neighbours.begin(), sizes.neighbours.end());
     const auto fewest_owned = static_cast<double>(*std::min_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
     const double halo_bytes = 24.0 * most_ghosts, gather_bytes = 24.0 * (nodes - fewest_owned);
-    // Per evaluation: the slowest rank's share of the kernel; its messages (one per neighbour, a gather of log2 n
-    // rounds, one reduction); the halo it sends and the whole vector it gathers over the link.
-    const double messages = neighbours + 2.0 * std::ceil(std::log2(n));
-    const double exchange = messages * latency_s + (halo_bytes + gather_bytes) / bandwidth;
-    const double step = costs.evaluations_per_step * (costs.kernel_s * imbalance / n + exchange) + costs.rest_per_step_s;
-    fmt::print("| {} | {:.3f} | {:.0f} / {:.0f} | {} | {:.1f} | {:.0f} | {:.3f} | {:.1f}x |\n", n, imbalance, mean_ghosts,
-               most_ghosts, neighbours, halo_bytes / 1e3, gather_bytes / 1e3, step * 1e3, one_rank / step);
+    double boundary_share = 0.0;
+    for (int q = 0; q < n; ++q)
+      if (sizes.points[static_cast<std::size_t>(q)] > 0)
+        boundary_share = std::max(boundary_share, static_cast<double>(sizes.boundary_points[static_cast<std::size_t>(q)]) /
+                                                      static_cast<double>(sizes.points[static_cast<std::size_t>(q)]));
+    // Per evaluation, the slowest rank: the kernel over its boundary points; then its halo (one message per
+    // neighbour, the bytes over the link) while it computes its interior, whichever takes longer; then the gather of
+    // the whole vector (log2 n rounds) and one reduction.
+    const double kernel = costs.kernel_s * imbalance / n;
+    const double halo = neighbours * latency_s + halo_bytes / bandwidth;
+    const double gather = 2.0 * std::ceil(std::log2(n)) * latency_s + gather_bytes / bandwidth;
+    const double evaluation = kernel * boundary_share + std::max(halo, kernel * (1.0 - boundary_share)) + gather;
+    const double step = costs.evaluations_per_step * evaluation + costs.rest_per_step_s;
+    fmt::print("| {} | {:.3f} | {:.0f} / {:.0f} | {:.0f}% | {} | {:.1f} | {:.0f} | {:.3f} | {:.1f}x |\n", n, imbalance,
+               mean_ghosts, most_ghosts, 100.0 * boundary_share, neighbours, halo_bytes / 1e3, gather_bytes / 1e3,
+               step * 1e3, one_rank / step);
   }
   return 0;
 }

@@ -83,7 +83,7 @@ PartSizes part_sizes(const MeshPartition& partition, std::span<const int> point_
   for (const int p : point_part) parts = std::max(parts, p + 1);
   const auto count = static_cast<std::size_t>(parts);
   PartSizes sizes{std::vector<std::int64_t>(count, 0), std::vector<std::int64_t>(count, 0),
-                  std::vector<std::int64_t>(count, 0), std::vector<int>(count, 0)};
+                  std::vector<std::int64_t>(count, 0), std::vector<std::int64_t>(count, 0), std::vector<int>(count, 0)};
   std::vector<int> neighbour_seen(count, -1);
   for (const int p : partition.node_part) ++sizes.owned_nodes[static_cast<std::size_t>(p)];
   // Nodes reached by each part, marked with the part's number so that one array serves every part in turn.
@@ -92,7 +92,8 @@ PartSizes part_sizes(const MeshPartition& partition, std::span<const int> point_
   for (std::size_t p = 0; p < point_part.size(); ++p) points_of[static_cast<std::size_t>(point_part[p])].push_back(static_cast<Index>(p));
   for (int part = 0; part < parts; ++part) {
     sizes.points[static_cast<std::size_t>(part)] = static_cast<std::int64_t>(points_of[static_cast<std::size_t>(part)].size());
-    for (const Index p : points_of[static_cast<std::size_t>(part)])
+    for (const Index p : points_of[static_cast<std::size_t>(part)]) {
+      sizes.boundary_points[static_cast<std::size_t>(part)] += reaches_another_part(rows, p, partition.node_part, part) ? 1 : 0;
       for (int k = 0; k < rows.size(p); ++k) {
         const auto node = static_cast<std::size_t>(rows.node(p, k));
         if (reached[node] == part) continue;
@@ -105,6 +106,7 @@ PartSizes part_sizes(const MeshPartition& partition, std::span<const int> point_
           ++sizes.neighbours[static_cast<std::size_t>(part)];
         }
       }
+    }
   }
   return sizes;
 }

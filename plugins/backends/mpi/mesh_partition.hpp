@@ -23,10 +23,18 @@ MeshPartition partition_mesh(const TetMesh& mesh, int parts);
 // puts those whose supports reach other parts' nodes (a support spans a node spacing or two) near the front.
 std::vector<int> boundary_layers(const TetMesh& mesh, const MeshPartition& partition, int layers);
 
+// Whether integration point p's support reaches a node that another part than `part` owns: a boundary point.
+inline bool reaches_another_part(const GradientRows& rows, Index p, std::span<const int> node_part, int part) {
+  for (int k = 0; k < rows.size(p); ++k)
+    if (node_part[static_cast<std::size_t>(rows.node(p, k))] != part) return true;
+  return false;
+}
+
 // Per part: its integration points, its ghost nodes (nodes its points' supports reach that another part owns), the
-// nodes it owns, and its neighbours (the parts owning its ghost nodes).
+// nodes it owns, its boundary points (those whose supports reach a ghost node), and its neighbours (the parts owning
+// its ghost nodes).
 struct PartSizes {
-  std::vector<std::int64_t> points, ghost_nodes, owned_nodes;
+  std::vector<std::int64_t> points, ghost_nodes, owned_nodes, boundary_points;
   std::vector<int> neighbours;
 };
 // `point_part[p]`: the part of integration point p; `rows`: the points' supports.

@@ -201,8 +201,7 @@ class MpiBackend final : public CpuEngine {
       const Index end = std::min(block + kBlock, points_.second);
       bool boundary = false;
       for (Index p = block; p < end; ++p) {
-        bool reaches = false;
-        for (int k = 0; k < rows.size(p) && !reaches; ++k) reaches = owner_[static_cast<std::size_t>(rows.node(p, k))] != rank_;
+        const bool reaches = reaches_another_part(rows, p, owner_, rank_);
         boundary_points_ += reaches ? 1 : 0;
         boundary = boundary || reaches;
       }
