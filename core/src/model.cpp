@@ -532,7 +532,7 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f, std
     // Contiguous shares of the ranges' points, so that each thread's batches are consecutive points.
     const std::function<void()>* calls = thread == 0 && progress ? &progress : nullptr;
     Index bad = std::numeric_limits<Index>::max();
-    for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
+    ThreadTeam::for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
       bad = std::min(bad, accumulate_forces(begin, end, local.data(), calls));
     });
     first_bad[static_cast<std::size_t>(thread)] = bad;
@@ -557,7 +557,7 @@ Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F,
     pad_displacement(u, thread);
     team_->barrier();
     StressBatch batch{};
-    for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
+    ThreadTeam::for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
       for (Index first = begin; first < end; first += batch.count) {
         batch.count = std::min<Index>(StressBatch::kCapacity, end - first);
         force_kernel::gather(ip_rows_, padded_u_.data(), first, end, batch);
@@ -585,7 +585,7 @@ void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<do
     std::fill(local.begin(), local.end(), 0.0);
     double P[9][StressBatch::kCapacity];
     const bool skip[StressBatch::kCapacity] = {};
-    for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
+    ThreadTeam::for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
       for (Index first = begin; first < end; first += StressBatch::kCapacity) {
         const int count = std::min<Index>(StressBatch::kCapacity, end - first);
         for (int p = 0; p < count; ++p)

@@ -72,14 +72,14 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     model.team().run([&](int thread) {
       Index& thread_bad = first_bad_[static_cast<std::size_t>(thread)];
       thread_bad = kNone;
-      for_each_piece_of_share(region.near, thread, threads,
+      ThreadTeam::for_each_piece_of_share(region.near, thread, threads,
                               [&](Index begin, Index end) { local_stresses(model, begin, end, thread_bad); });
       model.team().barrier();
       average_at_nodes(model, pressure_, /*weighted=*/false, region.own_vertices, thread);
       model.team().barrier();
       const auto& tets = model.mesh().tets;
       const auto& ip_tet = model.ip_tets();
-      for_each_piece_of_share(region.own, thread, threads, [&](Index begin, Index end) {
+      ThreadTeam::for_each_piece_of_share(region.own, thread, threads, [&](Index begin, Index end) {
         for (Index ip = begin; ip < end; ++ip) {
           const auto& tet = tets[ip_tet[ip]];
           const double pressure = node_value_[tet[0]] + node_value_[tet[1]] + node_value_[tet[2]] + node_value_[tet[3]];
@@ -210,7 +210,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     if (const Index bad = model.deformation_gradients(u, F_, region.far); bad >= 0) return bad;
     const int threads = model.team().size();
     model.team().run([&](int thread) {
-      for_each_piece_of_share(region.far, thread, threads, [&](Index begin, Index end) {
+      ThreadTeam::for_each_piece_of_share(region.far, thread, threads, [&](Index begin, Index end) {
         for (Index ip = begin; ip < end; ++ip) {
           J_[ip] = F_[ip].determinant();
           cofactor_[ip] = J_[ip] * F_[ip].inverse().transpose();
@@ -221,7 +221,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
       model.team().barrier();
       const auto& tets = model.mesh().tets;
       const auto& ip_tet = model.ip_tets();
-      for_each_piece_of_share(region.near, thread, threads, [&](Index begin, Index end) {
+      ThreadTeam::for_each_piece_of_share(region.near, thread, threads, [&](Index begin, Index end) {
         for (Index ip = begin; ip < end; ++ip) {
           const auto& tet = tets[ip_tet[ip]];
           J_bar_[ip] = 0.25 * (node_value_[tet[0]] + node_value_[tet[1]] + node_value_[tet[2]] + node_value_[tet[3]]);

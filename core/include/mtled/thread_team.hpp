@@ -3,6 +3,7 @@
 // arithmetic, and its answer, depend only on the team size), and whose idle threads wait briefly and then
 // sleep instead of spinning. OpenMP's default spin-waiting made two runs sharing two cores 25 times slower
 // each: a waiting thread held the core its partner needed. One-time setup loops still use OpenMP.
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <exception>
@@ -43,6 +44,22 @@ class ThreadTeam {
   // The contiguous share [begin, end) of 0 .. n - 1 that thread `thread` of `size` takes.
   static std::pair<std::int64_t, std::int64_t> share(std::int64_t n, int thread, int size) {
     return {n * thread / size, n * (thread + 1) / size};
+  }
+  // body(begin, end) over share `thread` of `size` of the points of some ranges (pairs first .. second - 1) taken in
+  // order: share() of their count, one call per range the share meets.
+  template <class Ranges, class Body>
+  static void for_each_piece_of_share(const Ranges& ranges, int thread, int size, Body&& body) {
+    std::int64_t n = 0;
+    for (const auto& range : ranges) n += range.second - range.first;
+    const auto [begin, end] = share(n, thread, size);
+    std::int64_t offset = 0;  // of the current range among the ranges' points
+    for (const auto& range : ranges) {
+      const std::int64_t count = range.second - range.first;
+      const std::int64_t from = std::max<std::int64_t>(begin - offset, 0), to = std::min<std::int64_t>(end - offset, count);
+      using Value = decltype(range.first);
+      if (from < to) body(static_cast<Value>(range.first + from), static_cast<Value>(range.first + to));
+      offset += count;
+    }
   }
   // run() of body(begin, end) over the threads' shares of 0 .. n - 1; on the caller alone, body(0, n), when a
   // share would hold fewer than `grain` items: waking the team costs microseconds, and every meeting of the

@@ -1,10 +1,8 @@
 #pragma once
 #include <Eigen/Dense>
-#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <new>
-#include <span>
 #include <utility>
 #include <vector>
 
@@ -18,22 +16,6 @@ using Index = std::int32_t;
 
 // Integration points first .. second - 1.
 using PointRange = std::pair<Index, Index>;
-
-// body(begin, end) over share `part` of `parts` of the ranges' points taken in order (contiguous equal shares, as
-// ThreadTeam::share splits one range), one call per range the share meets.
-template <class Body>
-void for_each_piece_of_share(std::span<const PointRange> ranges, int part, int parts, Body&& body) {
-  std::int64_t n = 0;
-  for (const PointRange& range : ranges) n += range.second - range.first;
-  const std::int64_t begin = n * part / parts, end = n * (part + 1) / parts;
-  std::int64_t offset = 0;  // of the current range among the ranges' points
-  for (const PointRange& range : ranges) {
-    const std::int64_t size = range.second - range.first;
-    const std::int64_t from = std::max<std::int64_t>(begin - offset, 0), to = std::min<std::int64_t>(end - offset, size);
-    if (from < to) body(static_cast<Index>(range.first + from), static_cast<Index>(range.first + to));
-    offset += size;
-  }
-}
 
 // Allocates on 64-byte boundaries (a cache line, and the widest SIMD register), for the arrays the force
 // kernel reads with aligned vector loads.

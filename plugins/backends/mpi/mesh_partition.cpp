@@ -3,9 +3,10 @@
 #include <metis.h>
 
 #include <algorithm>
-#include <numeric>
 #include <stdexcept>
 #include <string>
+
+#include "mtled/support_rows.hpp"
 
 namespace mtled {
 
@@ -35,37 +36,31 @@ MeshPartition partition_mesh(const TetMesh& mesh, int parts) {
 std::vector<int> boundary_layers(const TetMesh& mesh, const MeshPartition& partition, int layers) {
   const auto nodes = static_cast<std::size_t>(mesh.node_count());
   const std::vector<int>& owner = partition.node_part;
-  // The nodes' neighbours along the tets' edges (both directions, duplicates harmless to the search).
-  std::vector<std::size_t> start(nodes + 1, 0);
-  for (const auto& tet : mesh.tets)
-    for (const Index a : tet) start[static_cast<std::size_t>(a) + 1] += 3;
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<Index> neighbour(start.back());
-  std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-  for (const auto& tet : mesh.tets)
-    for (const Index a : tet)
-      for (const Index b : tet)
-        if (a != b) neighbour[fill[static_cast<std::size_t>(a)]++] = b;
+  // A node's neighbours: the other vertices of its tets.
+  const SupportRows node_tets = transpose_rows(mesh.tet_count(), mesh.node_count(), [&](Index t, auto&& add) {
+    for (const Index v : mesh.tets[static_cast<std::size_t>(t)]) add(v);
+  });
+  const auto for_each_neighbour = [&](std::size_t n, auto&& visit) {
+    for (std::int64_t k = node_tets.offsets[n]; k < node_tets.offsets[n + 1]; ++k)
+      for (const Index v : mesh.tets[static_cast<std::size_t>(node_tets.nodes[static_cast<std::size_t>(k)])])
+        if (static_cast<std::size_t>(v) != n) visit(static_cast<std::size_t>(v));
+  };
   // hops[n]: edges from n to the nearest node another part owns, through nodes of n's own part.
   std::vector<int> hops(nodes, layers);
   std::vector<Index> front, next;
-  for (std::size_t n = 0; n < nodes; ++n)
-    for (std::size_t k = start[n]; k < start[n + 1]; ++k)
-      if (owner[static_cast<std::size_t>(neighbour[k])] != owner[n]) {
-        hops[n] = 1;
-        front.push_back(static_cast<Index>(n));
-        break;
-      }
+  for (std::size_t n = 0; n < nodes; ++n) {
+    for_each_neighbour(n, [&](std::size_t m) { hops[n] = owner[m] != owner[n] ? 1 : hops[n]; });
+    if (hops[n] == 1) front.push_back(static_cast<Index>(n));
+  }
   for (int distance = 2; distance < layers && !front.empty(); ++distance) {
     next.clear();
     for (const Index n : front)
-      for (std::size_t k = start[static_cast<std::size_t>(n)]; k < start[static_cast<std::size_t>(n) + 1]; ++k) {
-        const auto m = static_cast<std::size_t>(neighbour[k]);
+      for_each_neighbour(static_cast<std::size_t>(n), [&](std::size_t m) {
         if (owner[m] == owner[static_cast<std::size_t>(n)] && hops[m] > distance) {
           hops[m] = distance;
           next.push_back(static_cast<Index>(m));
         }
-      }
+      });
     front.swap(next);
   }
   std::vector<int> layer(mesh.tets.size(), layers);

@@ -121,11 +121,7 @@ class MpiBackend final : public CpuEngine {
     start = Clock::now();
     send_contributions();
     exchange_s_ += seconds_since(start);
-    Index interior_bad = -1;
-    if (interior_ranges_.empty())
-      std::fill(f.begin(), f.end(), 0.0);
-    else
-      interior_bad = model().internal_forces(u, f, interior_ranges_, progress_);
+    const Index interior_bad = model().internal_forces(u, f, interior_ranges_, progress_);
     start = Clock::now();
     MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
     sum_and_gather(f);
@@ -197,6 +193,9 @@ class MpiBackend final : public CpuEngine {
     boundary_ranges_.clear();
     interior_ranges_.clear();
     boundary_points_ = 0;
+    // With a volumetric treatment every point goes first: its averages reach past the boundary points, so the
+    // interior would evaluate them again.
+    const bool all_first = model.volumetric_treatment() != nullptr;
     for (Index block = points_.first; block < points_.second; block += kBlock) {
       const Index end = std::min(block + kBlock, points_.second);
       bool boundary = false;
@@ -205,9 +204,7 @@ class MpiBackend final : public CpuEngine {
         boundary_points_ += reaches ? 1 : 0;
         boundary = boundary || reaches;
       }
-      // With a volumetric treatment every point goes first: its averages reach past the boundary points, so the
-      // interior would evaluate them again.
-      auto& ranges = boundary || model.volumetric_treatment() != nullptr ? boundary_ranges_ : interior_ranges_;
+      auto& ranges = boundary || all_first ? boundary_ranges_ : interior_ranges_;
       if (!ranges.empty() && ranges.back().second == block)
         ranges.back().second = end;
       else
