@@ -15,10 +15,25 @@ double tet_volume(const TetMesh& mesh, Index t) {
   return (mesh.points[tet[1]] - a).dot((mesh.points[tet[2]] - a).cross(mesh.points[tet[3]] - a)) / 6.0;
 }
 
+double tet_radius_ratio(const TetMesh& mesh, Index t) {
+  const auto& tet = mesh.tets[t];
+  const Vec3& p0 = mesh.points[tet[0]];
+  // 3 r_in / r_circ: r_in = 3 V / (sum of face areas), r_circ from the edge vectors at vertex 0.
+  const Vec3 a = mesh.points[tet[1]] - p0, b = mesh.points[tet[2]] - p0, c = mesh.points[tet[3]] - p0;
+  const double volume = std::abs(a.dot(b.cross(c))) / 6.0;
+  if (!(volume > 0.0)) return 0.0;
+  const Vec3 opposite = (mesh.points[tet[2]] - mesh.points[tet[1]]).cross(mesh.points[tet[3]] - mesh.points[tet[1]]);
+  const double area = 0.5 * (a.cross(b).norm() + b.cross(c).norm() + c.cross(a).norm() + opposite.norm());
+  const double circumradius =
+      (a.squaredNorm() * b.cross(c) + b.squaredNorm() * c.cross(a) + c.squaredNorm() * a.cross(b)).norm() / (12.0 * volume);
+  return 3.0 * (3.0 * volume / area) / circumradius;
+}
+
 MeshQuality mesh_quality(const TetMesh& mesh) {
   MeshQuality quality{180.0, 1.0};
   constexpr int kEdges[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}, {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
-  for (const auto& tet : mesh.tets) {
+  for (Index t = 0; t < mesh.tet_count(); ++t) {
+    const auto& tet = mesh.tets[t];
     const std::array<Vec3, 4> p = {mesh.points[tet[0]], mesh.points[tet[1]], mesh.points[tet[2]], mesh.points[tet[3]]};
     // The dihedral angle along edge (i, j): between the other two vertices seen along the edge.
     for (const auto& e : kEdges) {
@@ -29,14 +44,7 @@ MeshQuality mesh_quality(const TetMesh& mesh) {
       const double angle = std::atan2(u.cross(w).norm(), u.dot(w)) * 180.0 / 3.14159265358979323846;
       quality.min_dihedral_angle_deg = std::min(quality.min_dihedral_angle_deg, angle);
     }
-    // 3 r_in / r_circ: r_in = 3 V / (sum of face areas), r_circ from the edge vectors at vertex 0.
-    const Vec3 a = p[1] - p[0], b = p[2] - p[0], c = p[3] - p[0];
-    const double volume = std::abs(a.dot(b.cross(c))) / 6.0;
-    const double area = 0.5 * (a.cross(b).norm() + b.cross(c).norm() + c.cross(a).norm() + (p[2] - p[1]).cross(p[3] - p[1]).norm());
-    const double circumradius =
-        (a.squaredNorm() * b.cross(c) + b.squaredNorm() * c.cross(a) + c.squaredNorm() * a.cross(b)).norm() / (12.0 * volume);
-    const double ratio = volume > 0.0 ? 3.0 * (3.0 * volume / area) / circumradius : 0.0;
-    quality.min_radius_ratio = std::min(quality.min_radius_ratio, ratio);
+    quality.min_radius_ratio = std::min(quality.min_radius_ratio, tet_radius_ratio(mesh, t));
   }
   return quality;
 }

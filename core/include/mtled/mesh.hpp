@@ -57,6 +57,8 @@ struct MeshQuality {
   double min_radius_ratio = 0.0;
 };
 MeshQuality mesh_quality(const TetMesh& mesh);
+// Tet t's radius ratio 3 r_in / r_circ: 1 for a regular tet, towards 0 for a sliver, 0 when flat.
+double tet_radius_ratio(const TetMesh& mesh, Index t);
 
 // Per-node mean length of the mesh edges that meet at the node.
 std::vector<double> mean_edge_length_at_nodes(const TetMesh& mesh);
