@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "explicit_update.hpp"
+#include "mtled/explicit_update.hpp"
 #include "mtled/constraints.hpp"
 #include "mtled/model.hpp"
 
@@ -48,7 +48,7 @@ void CpuEngine::set_state(std::span<const double> u, std::span<const double> u_p
 
 Index CpuEngine::evaluate_forces(IncrementSums* sums) {
   f_previous_.swap(f_);
-  const Index bad = timed_forces(u_, f_);
+  const Index bad = timed([&] { return forces(u_, f_); });
   if (bad < 0 && sums != nullptr) *sums = increment_sums(u_, u_previous_, f_, f_previous_, mass_);
   return bad;
 }
@@ -90,36 +90,15 @@ StepSums CpuEngine::commit() {
   std::fill(partial_.begin(), partial_.begin() + parts, Partial{});
   for_each_node_share([&](std::size_t begin, std::size_t end, int part) {
     Partial& mine = partial_[static_cast<std::size_t>(part)];
-    for (std::size_t i = begin; i < end; ++i) {
-      double added = 0.0, product = 0.0;
-      for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
-        const double after = prediction_[d] - u_[d], before = free_[d] - u_[d];
-        added += std::max(0.0, after * after - before * before);
-        product += (u_[d] - u_previous_[d]) * after;
-        mine.sums.largest_increment = std::max(mine.sums.largest_increment, std::abs(after));
-        mine.sums.largest_displacement = std::max(mine.sums.largest_displacement, std::abs(prediction_[d]));
-      }
-      mine.sums.projection_energy += mass_[i] * added;
-      const double e = mass_[i] * product;
-      mine.sums.kinetic_product += e;
-      if (std::abs(e) > mine.fastest_energy) {
-        mine.fastest_energy = std::abs(e);
-        mine.sums.fastest_node = static_cast<Index>(i);
-      }
-    }
+    for (std::size_t i = begin; i < end; ++i)
+      add_step_sums(i, u_.data(), u_previous_.data(), prediction_.data(), free_.data(), mass_.data(), mine.sums,
+                    mine.fastest_energy);
   }, parts);
   StepSums sums;
   double fastest_energy = 0.0;
   for (int part = 0; part < parts; ++part) {
     const Partial& p = partial_[static_cast<std::size_t>(part)];
-    sums.largest_increment = std::max(sums.largest_increment, p.sums.largest_increment);
-    sums.largest_displacement = std::max(sums.largest_displacement, p.sums.largest_displacement);
-    sums.projection_energy += p.sums.projection_energy;
-    sums.kinetic_product += p.sums.kinetic_product;
-    if (p.fastest_energy > fastest_energy) {
-      fastest_energy = p.fastest_energy;
-      sums.fastest_node = p.sums.fastest_node;
-    }
+    combine_step_sums(p.sums, p.fastest_energy, sums, fastest_energy);
   }
   u_previous_.swap(u_);
   u_.swap(prediction_);
@@ -128,11 +107,13 @@ StepSums CpuEngine::commit() {
 
 // Counted with the step's own evaluations: the monitors' extra ones (the stable step's Lanczos iterations) are
 // force-kernel work too.
-Index CpuEngine::internal_forces(std::span<const double> u, std::span<double> f) { return timed_forces(u, f); }
+Index CpuEngine::internal_forces(std::span<const double> u, std::span<double> f) {
+  return timed([&] { return forces(u, f); });
+}
 
-Index CpuEngine::timed_forces(std::span<const double> u, std::span<double> f) {
+Index CpuEngine::timed(const std::function<Index()>& compute) {
   const auto start = std::chrono::steady_clock::now();
-  const Index bad = forces(u, f);
+  const Index bad = compute();
   kernel_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ++evaluations_;
   return bad;

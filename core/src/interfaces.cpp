@@ -5,7 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "explicit_update.hpp"
+#include "mtled/explicit_update.hpp"
 #include "mtled/interfaces/backend.hpp"
 #include "mtled/interfaces/driver.hpp"
 #include "mtled/interfaces/integrator.hpp"

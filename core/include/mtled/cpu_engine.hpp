@@ -2,6 +2,7 @@
 // The kernel's own StepEngine: the state in host memory, the work on the model's thread team (the force kernel,
 // and the per-node passes of the update and the step's sums). Scenes without a "backend" block run on it; the
 // "cpu" backend plugin (plugins/backends/cpu.cpp) names it.
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -34,7 +35,12 @@ class CpuEngine : public StepEngine {
   // f = f_int(u) over every node, for both calls above: the model's force kernel here; an engine that shares the
   // integration points between processes computes its own and completes f with the others' contributions.
   virtual Index forces(std::span<const double> u, std::span<double> f);
+  // `compute` (a force evaluation), counted and timed as the force kernel's work for describe().
+  Index timed(const std::function<Index()>& compute);
   const Model& model() const { return *model_; }
+
+  // The state, for an engine that does the per-node work on part of the nodes itself (the mpi backend: a rank's own).
+  std::vector<double> u_, u_previous_, prediction_, free_, f_, f_previous_, mass_;
 
  private:
   // One share's part of the step's sums, and the energy of its fastest node.
@@ -43,13 +49,11 @@ class CpuEngine : public StepEngine {
     double fastest_energy = 0.0;
   };
   int parts_for(Index nodes) const;
-  Index timed_forces(std::span<const double> u, std::span<double> f);  // forces(), counted and timed
   // body(begin, end, part) over `parts` contiguous shares of the nodes, on the team when there are several.
   template <class Body>
   void for_each_node_share(Body&& body, int parts);
 
   const Model* model_ = nullptr;
-  std::vector<double> u_, u_previous_, prediction_, free_, f_, f_previous_, mass_;
   std::vector<std::int64_t> first_bad_;  // per share: the first non-finite unknown of the prediction
   std::vector<Partial> partial_;
   long evaluations_ = 0;  // of the forces (the step's and the monitors' extra ones), and their time

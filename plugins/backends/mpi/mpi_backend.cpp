@@ -2,14 +2,17 @@
 // backend when it runs on more than one rank). The background cells are partitioned by METIS (the tets' dual graph,
 // faces shared); each rank computes the internal forces of its cells' integration points on its threads, sends its
 // contributions to the nodes other ranks own (the points at the partition boundary first, the interior computed
-// while those travel), sums those it receives for its own nodes in rank order, and every rank
-// then gathers the complete force vector. The rest of the step (the update, the needle, the constraint projection,
-// the monitors) runs on every rank on the same complete state, so the ranks agree bitwise on every verdict and only
-// rank 0 writes. docs/mpi.md gives the design, its costs and what it does not distribute yet.
+// while those travel) and sums those it receives for its own nodes in rank order. It then updates its own nodes: the
+// prediction, its part of the constraint projection's products and the step's sums, each global value reduced in rank
+// order so that every rank holds the same bits; last, every rank gathers the new displacement of every node, which
+// the drivers, the monitors and the next force evaluation read. The constraint solve, the drivers and the monitors run
+// on every rank on that same state, and only rank 0 writes. docs/mpi.md gives the design, its costs and what it does
+// not distribute yet.
 #include <mpi.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -18,7 +21,9 @@
 
 #include "mesh_partition.hpp"
 #include "mtled/cpu_engine.hpp"
+#include "mtled/constraints.hpp"
 #include "mtled/errors.hpp"
+#include "mtled/explicit_update.hpp"
 #include "mtled/log.hpp"
 #include "mtled/model.hpp"
 #include "mtled/plugin.hpp"
@@ -45,7 +50,8 @@ class MpiBackend final : public CpuEngine {
         "The processes of an MPI run (mpirun -np N mtled run SCENE, chosen by the command line on more than one "
         "rank): METIS partitions the background cells, each rank computes its cells' integration points on its "
         "threads (--threads per rank) and the ranks exchange their contributions to each other's nodes every force "
-        "evaluation; the rest of the step runs on every rank on the same state, and rank 0 writes the outputs.");
+        "evaluation; each rank updates its own nodes and the ranks then gather the new displacements; the constraint "
+        "solve, the drivers and the monitors run on every rank on the same state, and rank 0 writes the outputs.");
   }
   explicit MpiBackend(const Parameters& parameters) {
     int started = 0;
@@ -105,32 +111,196 @@ class MpiBackend final : public CpuEngine {
     out.erase("threads");
     out["partition"] = partition_;
     if (whole_on_every_rank_) out["forces"] = "whole on every rank (volumetric treatment)";
-    out["exchange_s"] = exchange_s_;  // rank 0's: sends, receives, its sums and the gather
+    out["exchange_s"] = exchange_s_;  // rank 0's: sends, receives, its sums, the gathers and the step's reductions
     return out;
   }
 
+  // The step on this rank's own nodes (CpuEngine's state: u_ and u_previous_ hold every node, the other vectors are
+  // right at the rank's own nodes only).
+  Index evaluate_forces(IncrementSums* sums) override {
+    f_previous_.swap(f_);
+    return timed([&] {
+      const std::int64_t bad = owned_forces(u_, f_);
+      IncrementSums mine;
+      if (sums != nullptr)
+        for (const Index i : owned_)
+          for (std::size_t d = 3 * static_cast<std::size_t>(i); d < 3 * static_cast<std::size_t>(i) + 3; ++d)
+            add_increment_sums(d, u_, u_previous_, f_, f_previous_, mass_, mine);
+      // One exchange for both: the first inadmissible point (an index, exact as a double) and the sums.
+      const auto start = Clock::now();
+      const double values[] = {static_cast<double>(bad), mine.stiffness, mine.inertia};
+      const std::vector<double>& all = from_every_rank(values);
+      exchange_s_ += seconds_since(start);
+      const auto none = static_cast<double>(kNoneIndex);  // 2^63: above any point index, which a double holds exactly
+      double first_bad = none;
+      IncrementSums total;
+      for (int q = 0; q < ranks_; ++q) {
+        const double* v = &all[3 * static_cast<std::size_t>(q)];
+        first_bad = std::min(first_bad, v[0]);
+        total.stiffness += v[1];
+        total.inertia += v[2];
+      }
+      if (sums != nullptr) *sums = total;
+      return first_bad == none ? Index{-1} : static_cast<Index>(first_bad);
+    });
+  }
+
+  std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
+    const double* external = f_ext.empty() ? nullptr : f_ext.data();
+    std::int64_t first_bad = std::numeric_limits<std::int64_t>::max();
+    for (const Index node : owned_) {
+      const auto i = static_cast<std::size_t>(node);
+      explicit_update(u_.data(), u_previous_.data(), external, f_.data(), mass_.data(), alpha, beta,
+                      prediction_.data(), i, i + 1);
+      for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
+        free_[d] = prediction_[d];
+        if (!std::isfinite(prediction_[d])) first_bad = std::min(first_bad, static_cast<std::int64_t>(d));
+      }
+    }
+    MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
+    return first_bad == std::numeric_limits<std::int64_t>::max() ? -1 : first_bad;
+  }
+
+  void prediction(std::span<double> out) override {
+    gather_owned(prediction_);
+    std::copy(prediction_.begin(), prediction_.end(), out.begin());
+  }
+
+  // out = Phi u~: each rank's rows summed over the entries at its own nodes, the ranks' sums added in rank order.
+  void constrained_values(const ConstraintBlock& block, std::vector<double>& out) override {
+    const OwnEntries& own = own_entries(block);
+    const std::size_t k = block.components.size();
+    std::vector<double>& mine = rank_products_;
+    mine.assign(static_cast<std::size_t>(block.rows) * k, 0.0);
+    for (std::size_t r = 0; r < static_cast<std::size_t>(block.rows); ++r) {
+      double sum[3] = {0.0, 0.0, 0.0};
+      for (std::int64_t i = own.row_offsets[r]; i < own.row_offsets[r + 1]; ++i) {
+        const std::int64_t e = own.row_entries[static_cast<std::size_t>(i)];
+        const double* v = &prediction_[3 * static_cast<std::size_t>(block.row_nodes[e])];
+        for (std::size_t j = 0; j < k; ++j) sum[j] += block.row_values[e] * v[block.components[j]];
+      }
+      for (std::size_t j = 0; j < k; ++j) mine[k * r + j] = sum[j];
+    }
+    const auto start = Clock::now();
+    const std::vector<double>& all = from_every_rank(mine);
+    exchange_s_ += seconds_since(start);
+    out.assign(mine.size(), 0.0);
+    for (int q = 0; q < ranks_; ++q)
+      for (std::size_t i = 0; i < out.size(); ++i) out[i] += all[static_cast<std::size_t>(q) * out.size() + i];
+  }
+
+  // u~ += M^-1 Phi^T y at the rank's own nodes (each node's sum as on one process).
+  void add_correction(const ConstraintBlock& block, const std::vector<double>& y) override {
+    const std::size_t k = block.components.size();
+    for (const std::size_t n : own_entries(block).nodes) {
+      double sum[3] = {0.0, 0.0, 0.0};
+      for (std::int64_t e = block.node_offsets[n]; e < block.node_offsets[n + 1]; ++e)
+        for (std::size_t j = 0; j < k; ++j)
+          sum[j] += block.node_values[e] * y[k * static_cast<std::size_t>(block.node_rows[e]) + j];
+      double* v = &prediction_[3 * static_cast<std::size_t>(block.nodes[n])];
+      for (std::size_t j = 0; j < k; ++j) v[block.components[j]] += sum[j];
+    }
+  }
+
+  // The rank's own nodes' sums, combined in rank order; then every rank gathers u_(n+1).
+  StepSums commit() override {
+    StepSums mine;
+    double fastest = 0.0;
+    for (const Index node : owned_)
+      add_step_sums(static_cast<std::size_t>(node), u_.data(), u_previous_.data(), prediction_.data(), free_.data(),
+                    mass_.data(), mine, fastest);
+    u_previous_.swap(u_);
+    u_.swap(prediction_);
+    // The sums travel with the displacements: one exchange.
+    const auto start = Clock::now();
+    const double values[kStepSumValues] = {mine.largest_increment, mine.largest_displacement, mine.projection_energy,
+                                           mine.kinetic_product,   fastest,  static_cast<double>(mine.fastest_node)};
+    gather_owned(u_, values);
+    exchange_s_ += seconds_since(start);
+    StepSums sums;
+    double fastest_energy = 0.0;
+    for (int q = 0; q < ranks_; ++q) {
+      const double* v = rank_extra(q);
+      combine_step_sums(StepSums{v[0], v[1], v[2], v[3], static_cast<Index>(v[5])}, v[4], sums, fastest_energy);
+    }
+    return sums;
+  }
+
  protected:
-  // The points whose supports reach other ranks' nodes first, their contributions sent; the interior points while
-  // those travel (the kernel lets MPI move them every few thousand points); then the rank's own sums and the gather.
+  // f at every node (the monitors' evaluations on host vectors): this rank's own sums, then gathered.
   Index forces(std::span<const double> u, std::span<double> f) override {
-    if (whole_on_every_rank_) return model().internal_forces(u, f);
+    std::int64_t first_bad = owned_forces(u, f);
+    const auto start = Clock::now();
+    MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
+    gather_owned(f);
+    exchange_s_ += seconds_since(start);
+    return first_bad == kNoneIndex ? -1 : static_cast<Index>(first_bad);
+  }
+
+ private:
+  // f right at this rank's own nodes: the points whose supports reach other ranks' nodes first, their contributions
+  // sent; the interior points while those travel (the kernel lets MPI move them every few thousand points); then the
+  // rank's own sums. With a treatment computed whole on every rank, f is right at every node. Returns this rank's
+  // lowest-numbered inadmissible point, or kNoneIndex: the callers reduce it with their own exchange.
+  std::int64_t owned_forces(std::span<const double> u, std::span<double> f) {
+    std::int64_t first_bad = kNoneIndex;
+    const auto note = [&](Index bad) {
+      if (bad >= 0) first_bad = std::min<std::int64_t>(first_bad, bad);
+    };
+    if (whole_on_every_rank_) {
+      note(model().internal_forces(u, f));
+      return first_bad;
+    }
     auto start = Clock::now();
     post_receives();
     exchange_s_ += seconds_since(start);
-    const Index boundary_bad = model().internal_forces(u, boundary_f_, boundary_ranges_);
+    note(model().internal_forces(u, boundary_f_, boundary_ranges_));
     start = Clock::now();
     send_contributions();
     exchange_s_ += seconds_since(start);
-    const Index interior_bad = model().internal_forces(u, f, interior_ranges_, progress_);
+    note(model().internal_forces(u, f, interior_ranges_, progress_));
     start = Clock::now();
     MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
-    sum_and_gather(f);
-    std::int64_t first_bad = std::numeric_limits<std::int64_t>::max();
-    for (const Index bad : {boundary_bad, interior_bad})
-      if (bad >= 0) first_bad = std::min<std::int64_t>(first_bad, bad);
-    MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
+    sum_owned(f);
     exchange_s_ += seconds_since(start);
-    return first_bad == std::numeric_limits<std::int64_t>::max() ? -1 : static_cast<Index>(first_bad);
+    return first_bad;
+  }
+
+  // A constraint block's entries at this rank's own nodes: by row (indices into row_nodes) and the positions in
+  // `nodes` of its own nodes. Kept per block until the block's revision changes.
+  struct OwnEntries {
+    const ConstraintBlock* block = nullptr;
+    long revision = -1;
+    std::vector<std::int64_t> row_offsets, row_entries;
+    std::vector<std::size_t> nodes;
+  };
+  const OwnEntries& own_entries(const ConstraintBlock& block) {
+    auto it = std::find_if(own_entries_.begin(), own_entries_.end(),
+                           [&](const OwnEntries& o) { return o.block == &block; });
+    if (it == own_entries_.end()) it = own_entries_.emplace(own_entries_.end());
+    if (it->revision == block.revision) return *it;
+    OwnEntries& own = *it;
+    own.block = &block;
+    own.revision = block.revision;
+    own.row_offsets.assign(1, 0);
+    own.row_entries.clear();
+    for (std::size_t r = 0; r < static_cast<std::size_t>(block.rows); ++r) {
+      for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e)
+        if (owner_[static_cast<std::size_t>(block.row_nodes[e])] == rank_) own.row_entries.push_back(e);
+      own.row_offsets.push_back(static_cast<std::int64_t>(own.row_entries.size()));
+    }
+    own.nodes.clear();
+    for (std::size_t n = 0; n < block.nodes.size(); ++n)
+      if (owner_[static_cast<std::size_t>(block.nodes[n])] == rank_) own.nodes.push_back(n);
+    return own;
+  }
+
+  // Every rank's `mine` (the same length on every rank), rank after rank, on every rank (valid until the next call).
+  const std::vector<double>& from_every_rank(std::span<const double> mine) {
+    every_rank_.resize(mine.size() * static_cast<std::size_t>(ranks_));  // kept: no allocation in the time step
+    MPI_Allgather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, every_rank_.data(),
+                  static_cast<int>(mine.size()), MPI_DOUBLE, MPI_COMM_WORLD);
+    return every_rank_;
   }
 
  private:
@@ -165,6 +335,10 @@ class MpiBackend final : public CpuEngine {
     for (const int o : owner_) gather_counts_[static_cast<std::size_t>(o)] += 3;
     gather_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
     std::partial_sum(gather_counts_.begin(), gather_counts_.end() - 1, gather_offsets_.begin() + 1);
+    step_gather_counts_ = gather_counts_;
+    for (int& count : step_gather_counts_) count += kStepSumValues;
+    step_gather_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
+    std::partial_sum(step_gather_counts_.begin(), step_gather_counts_.end() - 1, step_gather_offsets_.begin() + 1);
     gather_order_.clear();
     for (int q = 0; q < ranks_; ++q)
       for (std::size_t i = 0; i < nodes; ++i)
@@ -180,8 +354,8 @@ class MpiBackend final : public CpuEngine {
       send_buffer_[static_cast<std::size_t>(q)].resize(3 * send_nodes_[static_cast<std::size_t>(q)].size());
       receive_buffer_[static_cast<std::size_t>(q)].resize(3 * receive_nodes_[static_cast<std::size_t>(q)].size());
     }
-    owned_sum_.resize(3 * owned_.size());
-    gathered_.resize(3 * nodes);
+    owned_sum_.resize(3 * owned_.size() + kStepSumValues);
+    gathered_.resize(3 * nodes + kStepSumValues * static_cast<std::size_t>(ranks_));
     requests_.reserve(2 * static_cast<std::size_t>(ranks_));
   }
 
@@ -237,9 +411,9 @@ class MpiBackend final : public CpuEngine {
   }
 
   // f holds this rank's interior contributions, boundary_f_ its boundary ones, the receive buffers the other
-  // ranks'; afterwards f is every rank's sum, the same bits on every rank.
-  void sum_and_gather(std::span<double> f) {
-    // Each owned node's sum in rank order, whatever order the messages came in: the same answer on every repeat.
+  // ranks'; afterwards f holds each own node's sum, added in rank order whatever order the messages came in (the same
+  // answer on every repeat).
+  void sum_owned(std::span<double> f) {
     std::fill(owned_sum_.begin(), owned_sum_.end(), 0.0);
     for (int q = 0; q < ranks_; ++q) {
       if (q == rank_) {
@@ -257,10 +431,35 @@ class MpiBackend final : public CpuEngine {
         for (std::size_t c = 0; c < 3; ++c) owned_sum_[3 * s + c] += in[3 * k + c];
       }
     }
-    MPI_Allgatherv(owned_sum_.data(), static_cast<int>(owned_sum_.size()), MPI_DOUBLE, gathered_.data(),
-                   gather_counts_.data(), gather_offsets_.data(), MPI_DOUBLE, MPI_COMM_WORLD);
-    for (std::size_t k = 0; k < gather_order_.size(); ++k)
-      for (std::size_t c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(gather_order_[k]) + c] = gathered_[3 * k + c];
+    for (std::size_t k = 0; k < owned_.size(); ++k)
+      for (std::size_t c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(owned_[k]) + c] = owned_sum_[3 * k + c];
+  }
+
+  // v (3 per node), right at this rank's own nodes, becomes right at every node: each rank's own values gathered,
+  // with the step's sums (kStepSumValues) after them when given (every rank's, rank_extra(q), valid until the next
+  // gather).
+  void gather_owned(std::span<double> v, std::span<const double> step_sums = {}) {
+    const std::size_t own = 3 * owned_.size();
+    for (std::size_t k = 0; k < owned_.size(); ++k)
+      for (std::size_t c = 0; c < 3; ++c) owned_sum_[3 * k + c] = v[3 * static_cast<std::size_t>(owned_[k]) + c];
+    std::copy(step_sums.begin(), step_sums.end(), owned_sum_.begin() + static_cast<std::ptrdiff_t>(own));
+    const int extra = static_cast<int>(step_sums.size());
+    const std::vector<int>& counts = extra > 0 ? step_gather_counts_ : gather_counts_;
+    const std::vector<int>& offsets = extra > 0 ? step_gather_offsets_ : gather_offsets_;
+    MPI_Allgatherv(owned_sum_.data(), static_cast<int>(own) + extra, MPI_DOUBLE, gathered_.data(), counts.data(),
+                   offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    std::size_t k = 0;  // in gather_order_: rank 0's nodes, then rank 1's, ...
+    for (int q = 0; q < ranks_; ++q) {
+      const double* in = &gathered_[static_cast<std::size_t>(offsets[static_cast<std::size_t>(q)])];
+      for (int i = 0; i < gather_counts_[static_cast<std::size_t>(q)]; i += 3, ++k)
+        for (std::size_t c = 0; c < 3; ++c)
+          v[3 * static_cast<std::size_t>(gather_order_[k]) + c] = in[static_cast<std::size_t>(i) + c];
+    }
+  }
+  // Rank q's step sums from the last gather_owned that carried them.
+  const double* rank_extra(int q) const {
+    const auto i = static_cast<std::size_t>(q);
+    return &gathered_[static_cast<std::size_t>(step_gather_offsets_[i] + gather_counts_[i])];
   }
 
   static double seconds_since(Clock::time_point start) {
@@ -289,9 +488,11 @@ class MpiBackend final : public CpuEngine {
                   {"points_before_sending", before_sending},
                   {"imbalance", mean > 0.0 ? static_cast<double>(most) / mean : 1.0},
                   {"halo_bytes_per_evaluation", 24 * sent},
-                  {"gather_bytes_per_evaluation", 24 * model.node_count() * (ranks_ - 1)}};
+                  {"gather_bytes_per_step", 24 * model.node_count() * (ranks_ - 1)}};
   }
 
+  static constexpr int kStepSumValues = 6;  // StepSums and the fastest node's energy, as doubles
+  static constexpr std::int64_t kNoneIndex = std::numeric_limits<std::int64_t>::max();
   static constexpr int kLayers = 4;  // edges from the boundary told apart; a support spans one or two
   int rank_ = 0, ranks_ = 1;
   PointRange points_{0, 0};
@@ -299,8 +500,12 @@ class MpiBackend final : public CpuEngine {
   std::vector<std::vector<Index>> send_nodes_, receive_nodes_;
   std::vector<std::vector<double>> send_buffer_, receive_buffer_;
   std::vector<Index> owned_, slot_, gather_order_;
-  std::vector<int> gather_counts_, gather_offsets_;
-  std::vector<double> owned_sum_, gathered_;
+  std::vector<int> gather_counts_, gather_offsets_;            // per rank: 3 x its own nodes
+  std::vector<int> step_gather_counts_, step_gather_offsets_;  // the same with the step's sums
+  std::vector<double> owned_sum_, gathered_;  // this rank's own nodes' values (3 each), and every rank's
+  std::vector<double> rank_products_;         // this rank's part of a constraint block's products
+  std::vector<double> every_rank_;            // from_every_rank's answer
+  std::vector<OwnEntries> own_entries_;       // per constraint block met
   std::vector<MPI_Request> requests_;
   std::vector<PointRange> boundary_ranges_, interior_ranges_;
   std::int64_t boundary_points_ = 0;
