@@ -140,14 +140,15 @@ class MpiBackend final : public CpuEngine {
         total.stiffness += v[1];
         total.inertia += v[2];
       }
+      if (first_bad != none) return static_cast<Index>(first_bad);
       if (sums != nullptr) *sums = total;
-      return first_bad == none ? Index{-1} : static_cast<Index>(first_bad);
+      return Index{-1};
     });
   }
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
     const double* external = f_ext.empty() ? nullptr : f_ext.data();
-    std::int64_t first_bad = std::numeric_limits<std::int64_t>::max();
+    std::int64_t first_bad = kNoneIndex;
     for (const Index node : owned_) {
       const auto i = static_cast<std::size_t>(node);
       explicit_update(u_.data(), u_previous_.data(), external, f_.data(), mass_.data(), alpha, beta,
@@ -158,7 +159,7 @@ class MpiBackend final : public CpuEngine {
       }
     }
     MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
-    return first_bad == std::numeric_limits<std::int64_t>::max() ? -1 : first_bad;
+    return first_bad == kNoneIndex ? -1 : first_bad;
   }
 
   void prediction(std::span<double> out) override {
