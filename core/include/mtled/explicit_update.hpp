@@ -2,9 +2,9 @@
 // The damped central-difference update (mass-proportional damping c, step h; the form of Joldes, Wittek and
 // Miller, IJNMBE 2011, for dynamic relaxation):
 //   u+ = u + beta (u - u-) + alpha M^-1 (f_ext - f_int).
-// beta = 1, alpha = h^2 is the undamped central difference. The CPU's form of it and of dynamic relaxation's increment
-// sums, for DiscreteSystem's defaults and the CPU engine; a device backend writes the same arithmetic in its own
-// language.
+// beta = 1, alpha = h^2 is the undamped central difference. The CPU's form of it, of dynamic relaxation's increment
+// sums and of a step's sums (StepSums), for DiscreteSystem's defaults, the CPU engine and the mpi backend (which does
+// the per-node work on a rank's own nodes); a device backend writes the same arithmetic in its own language.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
