@@ -8,7 +8,8 @@
 // over the mean: the imbalance), ghost nodes per part (mean and largest), the largest share of boundary points
 // (whose supports reach a ghost node: computed before the halo is sent), neighbours, the bytes a rank sends and
 // receives per force evaluation (halo: 24 per ghost node; gather: 24 per node it does not own), and the projected
-// time per step on that many ranks of the run's threads (the model: docs/mpi.md).
+// time per step on that many ranks of the run's threads (the model: docs/mpi.md; the run's backend.update_s, the
+// per-node work and the constraint products, is divided between the ranks, the rest of its step repeated).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -29,8 +30,9 @@
 namespace {
 
 struct Costs {
-  double kernel_s = 0.0;            // one force evaluation on one rank
-  double rest_per_step_s = 0.0;     // the step's other work, which every rank repeats
+  double kernel_s = 0.0;             // one force evaluation on one rank
+  double update_per_step_s = 0.0;    // the per-node work and the constraint products, which the ranks divide
+  double repeated_per_step_s = 0.0;  // the step's other work (the solve, drivers, monitors), which every rank repeats
   double evaluations_per_step = 1.0;
 };
 
@@ -42,7 +44,9 @@ Costs measured_costs(const std::filesystem::path& run) {
   const double steps = s.at("steps").get<double>(), evaluations = s.at("backend").at("force_evaluations").get<double>();
   c.kernel_s = s.at("backend").at("force_kernel_s").get<double>();
   c.evaluations_per_step = evaluations / steps;
-  c.rest_per_step_s = (s.at("solve_time_s").get<double>() - c.kernel_s * evaluations) / steps;
+  const double update_s = s.at("backend").value("update_s", 0.0);
+  c.update_per_step_s = update_s / steps;
+  c.repeated_per_step_s = (s.at("solve_time_s").get<double>() - c.kernel_s * evaluations - update_s) / steps;
   return c;
 }
 
@@ -85,14 +89,16 @@ int study(int argc, char** argv) {
   const Model& model = simulation.model();
   const auto nodes = static_cast<double>(model.node_count());
   fmt::print("{}: {} nodes, {} integration points; one rank: force kernel {:.3f} ms per evaluation, {:.2f} "
-             "evaluations per step, the rest {:.3f} ms per step; network assumed {:.1f} us, {:.1f} GB/s\n",
+             "evaluations per step, the update {:.3f} ms and the rest {:.3f} ms per step; network assumed {:.1f} us, "
+             "{:.1f} GB/s\n",
              positional[0], model.node_count(), model.integration_point_count(), costs.kernel_s * 1e3,
-             costs.evaluations_per_step, costs.rest_per_step_s * 1e3, latency_s * 1e6, bandwidth / 1e9);
+             costs.evaluations_per_step, costs.update_per_step_s * 1e3, costs.repeated_per_step_s * 1e3,
+             latency_s * 1e6, bandwidth / 1e9);
   fmt::print("| parts | imbalance | ghost nodes per part (mean / largest) | boundary points (largest share) | neighbours "
              "(largest) | halo KB sent per evaluation (largest rank) | gather KB received per evaluation | projected "
              "ms per step | speed-up |\n");
   fmt::print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
-  const double one_rank = costs.evaluations_per_step * costs.kernel_s + costs.rest_per_step_s;
+  const double one_rank = costs.evaluations_per_step * costs.kernel_s + costs.update_per_step_s + costs.repeated_per_step_s;
   for (const int n : parts) {
     const MeshPartition partition = partition_mesh(model.mesh(), n);
     std::vector<int> point_part(static_cast<std::size_t>(model.integration_point_count()));
@@ -117,7 +123,10 @@ int study(int argc, char** argv) {
     const double halo = neighbours * latency_s + halo_bytes / bandwidth;
     const double gather = 2.0 * std::ceil(std::log2(n)) * latency_s + gather_bytes / bandwidth;
     const double evaluation = kernel * boundary_share + std::max(halo, kernel * (1.0 - boundary_share)) + gather;
-    const double step = costs.evaluations_per_step * evaluation + costs.rest_per_step_s;
+    // Then the rank's own nodes' update (the most-owning rank's share) and the repeated rest.
+    const double most_owned = static_cast<double>(*std::max_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
+    const double update = costs.update_per_step_s * most_owned / nodes;
+    const double step = costs.evaluations_per_step * evaluation + update + costs.repeated_per_step_s;
     fmt::print("| {} | {:.3f} | {:.0f} / {:.0f} | {:.0f}% | {} | {:.1f} | {:.0f} | {:.3f} | {:.1f}x |\n", n, imbalance,
                mean_ghosts, most_ghosts, 100.0 * boundary_share, neighbours, halo_bytes / 1e3, gather_bytes / 1e3,
                step * 1e3, one_rank / step);

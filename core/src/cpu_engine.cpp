@@ -1,7 +1,6 @@
 #include "mtled/cpu_engine.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -36,6 +35,7 @@ json CpuEngine::describe() const {
     out["force_kernel_bytes"] = bytes;
     out["force_kernel_GB_per_s"] = bytes / seconds / 1e9;
   }
+  out["update_s"] = update_s_;
   return out;
 }
 
@@ -54,6 +54,7 @@ Index CpuEngine::evaluate_forces(IncrementSums* sums) {
 }
 
 std::int64_t CpuEngine::predict(double alpha, double beta, std::span<const double> f_ext) {
+  const ScopeTimer timer(update_s_);
   const double* external = f_ext.empty() ? nullptr : f_ext.data();
   std::fill(first_bad_.begin(), first_bad_.end(), -1);
   for_each_node_share([&](std::size_t begin, std::size_t end, int part) {
@@ -78,14 +79,17 @@ void CpuEngine::set_prediction(std::span<const double> u) {
 void CpuEngine::prediction(std::span<double> out) { std::copy(prediction_.begin(), prediction_.end(), out.begin()); }
 
 void CpuEngine::constrained_values(const ConstraintBlock& block, std::vector<double>& out) {
+  const ScopeTimer timer(update_s_);
   mtled::constrained_values(block, prediction_, out, model_->team());
 }
 
 void CpuEngine::add_correction(const ConstraintBlock& block, const std::vector<double>& y) {
+  const ScopeTimer timer(update_s_);
   mtled::add_correction(block, y, prediction_, model_->team());
 }
 
 StepSums CpuEngine::commit() {
+  const ScopeTimer timer(update_s_);
   const int parts = parts_for(model_->node_count());
   std::fill(partial_.begin(), partial_.begin() + parts, Partial{});
   for_each_node_share([&](std::size_t begin, std::size_t end, int part) {
@@ -112,11 +116,9 @@ Index CpuEngine::internal_forces(std::span<const double> u, std::span<double> f)
 }
 
 Index CpuEngine::timed(const std::function<Index()>& compute) {
-  const auto start = std::chrono::steady_clock::now();
-  const Index bad = compute();
-  kernel_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const ScopeTimer timer(kernel_s_);
   ++evaluations_;
-  return bad;
+  return compute();
 }
 
 Index CpuEngine::forces(std::span<const double> u, std::span<double> f) { return model_->internal_forces(u, f); }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "mtled/interfaces/backend.hpp"
+#include "mtled/scope_timer.hpp"
 
 namespace mtled {
 
@@ -41,6 +42,10 @@ class CpuEngine : public StepEngine {
 
   // The state, for an engine that does the per-node work on part of the nodes itself (the mpi backend: a rank's own).
   std::vector<double> u_, u_previous_, prediction_, free_, f_, f_previous_, mass_;
+
+  // Seconds in the step's per-node work and the constraint products (describe(): "update_s", what a partition divides
+  // besides the forces; the partition study reads it), summed by a ScopeTimer in each of those calls.
+  double update_s_ = 0.0;
 
  private:
   // One share's part of the step's sums, and the energy of its fastest node.

@@ -17,6 +17,7 @@
 #include "mtled/log.hpp"
 #include "mtled/model.hpp"
 #include "mtled/plugin.hpp"
+#include "mtled/scope_timer.hpp"
 
 namespace mtled {
 namespace {
@@ -24,19 +25,6 @@ namespace {
 using cuda::check;
 using cuda::DeviceBuffer;
 using cuda::PinnedBuffer;
-
-// Adds the wall time of its scope to `total`: how long the host waits in the engine's calls.
-class Timed {
- public:
-  explicit Timed(double& total) : total_(total), start_(std::chrono::steady_clock::now()) {}
-  ~Timed() { total_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
-  Timed(const Timed&) = delete;
-  Timed& operator=(const Timed&) = delete;
-
- private:
-  double& total_;
-  std::chrono::steady_clock::time_point start_;
-};
 
 // Both force passes' rows on the device, in the precision the model stores them in.
 class DeviceRows {
@@ -208,20 +196,20 @@ class CudaBackend final : public StepEngine {
   }
 
   std::span<const double> displacement() override {
-    const Timed timed(engine_s_);
+    const ScopeTimer timed(engine_s_);
     if (!u_on_host_) from_device(u_.data(), host_u_.span());
     u_on_host_ = true;
     return host_u_.span();
   }
   std::span<const double> previous_displacement() override {
-    const Timed timed(engine_s_);
+    const ScopeTimer timed(engine_s_);
     if (!previous_on_host_) from_device(u_previous_.data(), host_u_previous_.span());
     previous_on_host_ = true;
     return host_u_previous_.span();
   }
 
   Index evaluate_forces(IncrementSums* sums) override {
-    const Timed timed(engine_s_);
+    const ScopeTimer timed(engine_s_);
     f_.swap(f_previous_);
     const Index bad = timed_forces(u_.data(), f_.data());
     if (bad >= 0 || sums == nullptr) return bad;
@@ -235,7 +223,7 @@ class CudaBackend final : public StepEngine {
   }
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
-    const Timed timed(engine_s_);
+    const ScopeTimer timed(engine_s_);
     if (!f_ext.empty()) to_device(f_ext, f_ext_.data());
     check(cudaMemsetAsync(first_non_finite_.data(), 0xff, sizeof(unsigned long long), stream_), "cudaMemsetAsync");
     cuda::predict(nodes_, u_.data(), u_previous_.data(), f_.data(), f_ext.empty() ? nullptr : f_ext_.data(),
@@ -254,7 +242,7 @@ class CudaBackend final : public StepEngine {
   void prediction(std::span<double> out) override { from_device(prediction_.data(), out); }
 
   void constrained_values(const ConstraintBlock& block, std::vector<double>& out) override {
-    const Timed timed(engine_s_);
+    const ScopeTimer timed(engine_s_);
     DeviceBlock& device = on_device(block);
     cuda::constrained_values(device.view, prediction_.data(), device.values.data(), stream_);
     check(cudaGetLastError(), "launching the constraint rows");
@@ -263,7 +251,7 @@ class CudaBackend final : public StepEngine {
   }
 
   void add_correction(const ConstraintBlock& block, const std::vector<double>& y) override {
-    const Timed timed(engine_s_);
+    const ScopeTimer timed(engine_s_);
     DeviceBlock& device = on_device(block);
     upload(y.data(), device.values.data(), y.size() * sizeof(double));
     cuda::add_correction(device.view, device.values.data(), prediction_.data(), stream_);
@@ -271,7 +259,7 @@ class CudaBackend final : public StepEngine {
   }
 
   StepSums commit() override {
-    const Timed timed(engine_s_);
+    const ScopeTimer timed(engine_s_);
     cuda::step_sums(nodes_, prediction_.data(), free_.data(), u_.data(), u_previous_.data(), mass_.data(),
                     partials_.data(), sums_.data(), stream_);
     check(cudaGetLastError(), "launching the step's sums");
@@ -286,7 +274,7 @@ class CudaBackend final : public StepEngine {
   }
 
   Index internal_forces(std::span<const double> u, std::span<double> f) override {
-    const Timed timed(engine_s_);
+    const ScopeTimer timed(engine_s_);
     to_device(u, scratch_u_.data());
     const Index bad = timed_forces(scratch_u_.data(), scratch_f_.data());
     from_device(scratch_f_.data(), f);

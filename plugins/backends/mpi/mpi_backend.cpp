@@ -147,6 +147,7 @@ class MpiBackend final : public CpuEngine {
   }
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
+    const ScopeTimer timer(update_s_);
     const double* external = f_ext.empty() ? nullptr : f_ext.data();
     std::int64_t first_bad = kNoneIndex;
     for (const Index node : owned_) {
@@ -169,6 +170,7 @@ class MpiBackend final : public CpuEngine {
 
   // out = Phi u~: each rank's rows summed over the entries at its own nodes, the ranks' sums added in rank order.
   void constrained_values(const ConstraintBlock& block, std::vector<double>& out) override {
+    const ScopeTimer timer(update_s_);
     const OwnEntries& own = own_entries(block);
     const std::size_t k = block.components.size();
     std::vector<double>& mine = rank_products_;
@@ -192,6 +194,7 @@ class MpiBackend final : public CpuEngine {
 
   // u~ += M^-1 Phi^T y at the rank's own nodes (each node's sum as on one process).
   void add_correction(const ConstraintBlock& block, const std::vector<double>& y) override {
+    const ScopeTimer timer(update_s_);
     const std::size_t k = block.components.size();
     for (const std::size_t n : own_entries(block).nodes) {
       double sum[3] = {0.0, 0.0, 0.0};
@@ -205,6 +208,7 @@ class MpiBackend final : public CpuEngine {
 
   // The rank's own nodes' sums, combined in rank order; then every rank gathers u_(n+1).
   StepSums commit() override {
+    const ScopeTimer timer(update_s_);
     StepSums mine;
     double fastest = 0.0;
     for (const Index node : owned_)
