@@ -25,8 +25,8 @@ void InversionMonitor::declare(ComponentDeclaration& d) {
            "\"unstable\", what \"inverted_between_points\"); \"warn\" logs the first and records them in summary.json "
            "(monitors.inversion). Tets around the needle's path (a vertex within the needle's radius plus that node's "
            "support radius of the swept shaft) fold because the kinematic needle cannot cut the tissue: they are "
-           "counted as cut (monitors.inversion.cut_tets), not folds. Slivers (radius ratio under 0.1; Gmsh's "
-           "meshes have none) are not judged: they turn over when the interpolated field departs from affine by "
+           "counted as cut (monitors.inversion.cut_tets), not folds. Slivers (radius ratio under 0.1; the shipped "
+           "scenes' meshes have none) are not judged: they turn over when the interpolated field departs from affine by "
            "their thickness, which a relaxation's transient does without the material folding "
            "(monitors.inversion.slivers_inverted)");
 }
@@ -54,7 +54,7 @@ bool in_needle_zone(const ModelView& model, Index t, const NeedleStatus& needle)
   return false;
 }
 
-// Below this radius ratio a tet is a sliver, too thin to judge (a Gmsh mesh's worst tet has about 0.2 to 0.3, a
+// Below this radius ratio a tet is a sliver, too thin to judge (the shipped scenes' worst tets have 0.21 to 0.30, a
 // regular one 1).
 constexpr double kSliverRadiusRatio = 0.1;
 
