@@ -115,11 +115,6 @@ Index CpuEngine::internal_forces(std::span<const double> u, std::span<double> f)
   return timed([&] { return forces(u, f); });
 }
 
-Index CpuEngine::timed(const std::function<Index()>& compute) {
-  const ScopeTimer timer(kernel_s_);
-  ++evaluations_;
-  return compute();
-}
 
 Index CpuEngine::forces(std::span<const double> u, std::span<double> f) { return model_->internal_forces(u, f); }
 

@@ -122,6 +122,7 @@ void Model::build_integration_points(int points_per_tet, const std::vector<int>&
       }
     }
   }
+  every_point_ = {0, integration_point_count()};
 }
 
 std::vector<std::vector<Index>> Model::find_supports(const std::vector<Vec3>& points, const char* what) const {
@@ -511,8 +512,7 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4, const std::fu
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f) const {
   if (volumetric_) return volumetric_->internal_forces(*this, u, f);
-  const PointRange all{0, integration_point_count()};
-  return internal_forces(u, f, std::span<const PointRange>(&all, 1));
+  return internal_forces(u, f, every_point());
 }
 
 Index Model::internal_forces(std::span<const double> u, std::span<double> f, std::span<const PointRange> ranges,
@@ -544,8 +544,7 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f, std
 }
 
 Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F) const {
-  const PointRange all{0, integration_point_count()};
-  return deformation_gradients(u, F, std::span<const PointRange>(&all, 1));
+  return deformation_gradients(u, F, every_point());
 }
 
 Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F,
@@ -574,8 +573,7 @@ Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F,
 }
 
 void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f) const {
-  const PointRange all{0, integration_point_count()};
-  scatter_stresses(weighted_stress, f, std::span<const PointRange>(&all, 1));
+  scatter_stresses(weighted_stress, f, every_point());
 }
 
 void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f,

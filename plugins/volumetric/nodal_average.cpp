@@ -57,8 +57,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   // shared by q's and p's tets of (1/4) w_p / W_I times J_p F_p^-T. Summed over q: point p carries the extra
   // stress w_p (sum over its tet's vertices I of Pi_I) J_p F_p^-T with Pi_I = (1/4) sum_q pi_q / W_I.
   Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f) override {
-    const PointRange all{0, model.integration_point_count()};
-    return internal_forces(model, u, f, std::span<const PointRange>(&all, 1));
+    return internal_forces(model, u, f, model.every_point());
   }
 
   bool sums_over_ranges() const override { return true; }
@@ -94,8 +93,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   }
 
   double strain_energy(const Model& model, std::span<const double> u) override {
-    const PointRange all{0, model.integration_point_count()};
-    if (averaged_dilatation(model, u, region_of(model, std::span<const PointRange>(&all, 1))) >= 0)
+    if (averaged_dilatation(model, u, region_of(model, model.every_point())) >= 0)
       return std::numeric_limits<double>::quiet_NaN();
     double energy = 0.0;
     for (Index ip = 0; ip < model.integration_point_count(); ++ip)

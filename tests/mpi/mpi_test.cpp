@@ -118,9 +118,9 @@ TEST_P(MpiRun, TheCubeIsTheOneProcessAnswerAndTheSameOnARepeat) {
 TEST_P(MpiRun, TheAveragedDilatationIsDividedAndIsTheOneProcessAnswer) {
   const int ranks = GetParam();
   const std::string name = "averaged_on_" + std::to_string(ranks);
-  json scene = json::parse(test::read_text(needle_scene(name)));
-  scene["volumetric"] = {{"type", "nodal_average"}};
   const fs::path file = needle_scene(name);
+  json scene = json::parse(test::read_text(file));
+  scene["volumetric"] = {{"type", "nodal_average"}};
   test::write_text(file, scene.dump(2));
   const fs::path one = folder(name + "_serial"), several = folder(name);
   const auto serial = run(file, one, 0);

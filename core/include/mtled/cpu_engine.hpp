@@ -2,7 +2,6 @@
 // The kernel's own StepEngine: the state in host memory, the work on the model's thread team (the force kernel,
 // and the per-node passes of the update and the step's sums). Scenes without a "backend" block run on it; the
 // "cpu" backend plugin (plugins/backends/cpu.cpp) names it.
-#include <functional>
 #include <memory>
 #include <vector>
 
@@ -37,7 +36,12 @@ class CpuEngine : public StepEngine {
   // integration points between processes computes its own and completes f with the others' contributions.
   virtual Index forces(std::span<const double> u, std::span<double> f);
   // `compute` (a force evaluation), counted and timed as the force kernel's work for describe().
-  Index timed(const std::function<Index()>& compute);
+  template <class Compute>
+  auto timed(Compute&& compute) {
+    const ScopeTimer timer(kernel_s_);
+    ++evaluations_;
+    return compute();
+  }
   const Model& model() const { return *model_; }
 
   // The state, for an engine that does the per-node work on part of the nodes itself (the mpi backend: a rank's own).

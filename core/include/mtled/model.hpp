@@ -73,6 +73,8 @@ class Model {
 
   // Integration points
   Index integration_point_count() const { return static_cast<Index>(ip_weight_.size()); }
+  // The one range of every integration point, for the calls that take ranges.
+  std::span<const PointRange> every_point() const { return {&every_point_, 1}; }
   const std::vector<Vec3>& ip_positions() const { return ip_position_; }
   const std::vector<double>& ip_weights() const { return ip_weight_; }
   const std::vector<Index>& ip_tets() const { return ip_tet_; }
@@ -187,6 +189,7 @@ class Model {
   mutable AlignedVector<double> padded_u_;
   mutable std::vector<AlignedVector<double>> thread_forces_;
   mutable std::vector<Index> thread_first_bad_;
+  PointRange every_point_{0, 0};
   std::unique_ptr<ThreadTeam> team_;  // the time step's threads (setup loops use OpenMP)
 
   std::shared_ptr<VolumetricTreatment> volumetric_;

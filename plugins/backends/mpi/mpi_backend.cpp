@@ -119,31 +119,29 @@ class MpiBackend final : public CpuEngine {
   // right at the rank's own nodes only).
   Index evaluate_forces(IncrementSums* sums) override {
     f_previous_.swap(f_);
-    return timed([&] {
-      const std::int64_t bad = owned_forces(u_, f_);
-      IncrementSums mine;
-      if (sums != nullptr)
-        for (const Index i : owned_)
-          for (std::size_t d = 3 * static_cast<std::size_t>(i); d < 3 * static_cast<std::size_t>(i) + 3; ++d)
-            add_increment_sums(d, u_, u_previous_, f_, f_previous_, mass_, mine);
-      // One exchange for both: the first inadmissible point (an index, exact as a double) and the sums.
-      const auto start = Clock::now();
-      const double values[] = {static_cast<double>(bad), mine.stiffness, mine.inertia};
-      const std::vector<double>& all = from_every_rank(values);
-      exchange_s_ += seconds_since(start);
-      const auto none = static_cast<double>(kNoneIndex);  // 2^63: above any point index, which a double holds exactly
-      double first_bad = none;
-      IncrementSums total;
-      for (int q = 0; q < ranks_; ++q) {
-        const double* v = &all[3 * static_cast<std::size_t>(q)];
-        first_bad = std::min(first_bad, v[0]);
-        total.stiffness += v[1];
-        total.inertia += v[2];
-      }
-      if (first_bad != none) return static_cast<Index>(first_bad);
-      if (sums != nullptr) *sums = total;
-      return Index{-1};
-    });
+    const std::int64_t bad = timed([&] { return owned_forces(u_, f_); });
+    IncrementSums mine;
+    if (sums != nullptr)
+      for (const Index i : owned_)
+        for (std::size_t d = 3 * static_cast<std::size_t>(i); d < 3 * static_cast<std::size_t>(i) + 3; ++d)
+          add_increment_sums(d, u_, u_previous_, f_, f_previous_, mass_, mine);
+    // One exchange for both: the first inadmissible point (an index, exact as a double) and the sums.
+    const auto start = Clock::now();
+    const double values[] = {static_cast<double>(bad), mine.stiffness, mine.inertia};
+    const std::vector<double>& all = from_every_rank(values);
+    exchange_s_ += seconds_since(start);
+    const auto none = static_cast<double>(kNoneIndex);  // 2^63: above any point index, which a double holds exactly
+    double first_bad = none;
+    IncrementSums total;
+    for (int q = 0; q < ranks_; ++q) {
+      const double* v = &all[3 * static_cast<std::size_t>(q)];
+      first_bad = std::min(first_bad, v[0]);
+      total.stiffness += v[1];
+      total.inertia += v[2];
+    }
+    if (first_bad != none) return static_cast<Index>(first_bad);
+    if (sums != nullptr) *sums = total;
+    return -1;
   }
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
