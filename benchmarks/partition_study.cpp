@@ -7,9 +7,11 @@
 // steps and evaluations, the solve time). Prints one row per part count: integration points per part (the largest
 // over the mean: the imbalance), ghost nodes per part (mean and largest), the largest share of boundary points
 // (whose supports reach a ghost node: computed before the halo is sent), neighbours, the bytes a rank sends and
-// receives per force evaluation (halo: 24 per ghost node; gather: 24 per node it does not own), and the projected
-// time per step on that many ranks of the run's threads (the model: docs/mpi.md; the run's backend.update_s, the
-// per-node work and the constraint products, is divided between the ranks, the rest of its step repeated).
+// receives per force evaluation and per step (24 per ghost node each: its force contribution out, its displacement
+// in), the bytes of a whole-displacement gather (24 per node it does not own; on the steps the monitors read it), and
+// the projected time per step on that many ranks of the run's threads (the model: docs/mpi.md; the run's
+// backend.update_s, the per-node work and the constraint products, is divided between the ranks, the rest of its
+// step repeated).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -88,14 +90,19 @@ int study(int argc, char** argv) {
   const Simulation simulation(scene, catalog);
   const Model& model = simulation.model();
   const auto nodes = static_cast<double>(model.node_count());
+  // The steps on which a monitor reads the whole displacement: the fold check's (the most frequent; the stable-step
+  // estimate's are rarer), or the snapshots' when more frequent.
+  long whole_every = scene.section("monitors").integer("inversion_every_steps");
+  if (const long snapshots = scene.section("output").integer("every_steps"); snapshots > 0)
+    whole_every = whole_every > 0 ? std::min(whole_every, snapshots) : snapshots;
   fmt::print("{}: {} nodes, {} integration points; one rank: force kernel {:.3f} ms per evaluation, {:.2f} "
              "evaluations per step, the update {:.3f} ms and the rest {:.3f} ms per step; network assumed {:.1f} us, "
-             "{:.1f} GB/s\n",
+             "{:.1f} GB/s; the whole displacement gathered every {} steps\n",
              positional[0], model.node_count(), model.integration_point_count(), costs.kernel_s * 1e3,
              costs.evaluations_per_step, costs.update_per_step_s * 1e3, costs.repeated_per_step_s * 1e3,
-             latency_s * 1e6, bandwidth / 1e9);
+             latency_s * 1e6, bandwidth / 1e9, whole_every);
   fmt::print("| parts | imbalance | ghost nodes per part (mean / largest) | boundary points (largest share) | neighbours "
-             "(largest) | halo KB sent per evaluation (largest rank) | gather KB received per evaluation | projected "
+             "(largest) | halo KB per evaluation and per step (largest rank) | whole gather KB (largest rank) | projected "
              "ms per step | speed-up |\n");
   fmt::print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   const double one_rank = costs.evaluations_per_step * costs.kernel_s + costs.update_per_step_s + costs.repeated_per_step_s;
@@ -117,16 +124,21 @@ int study(int argc, char** argv) {
         boundary_share = std::max(boundary_share, static_cast<double>(sizes.boundary_points[static_cast<std::size_t>(q)]) /
                                                       static_cast<double>(sizes.points[static_cast<std::size_t>(q)]));
     // Per evaluation, the slowest rank: the kernel over its boundary points; then its halo (one message per
-    // neighbour, the bytes over the link) while it computes its interior, whichever takes longer; then the gather of
-    // the whole vector (log2 n rounds) and one reduction.
+    // neighbour, the bytes over the link) while it computes its interior, whichever takes longer; then one reduction
+    // (log2 n rounds).
     const double kernel = costs.kernel_s * imbalance / n;
     const double halo = neighbours * latency_s + halo_bytes / bandwidth;
-    const double gather = 2.0 * std::ceil(std::log2(n)) * latency_s + gather_bytes / bandwidth;
-    const double evaluation = kernel * boundary_share + std::max(halo, kernel * (1.0 - boundary_share)) + gather;
-    // Then the rank's own nodes' update (the most-owning rank's share) and the repeated rest.
+    const double reduction = std::ceil(std::log2(n)) * latency_s;
+    const double evaluation = kernel * boundary_share + std::max(halo, kernel * (1.0 - boundary_share)) + reduction;
+    // Per step: the rank's own nodes' update (the most-owning rank's share), the repeated rest, and the exchanges
+    // of the step: the prediction's, the constraint products' and the step sums' reductions and the drivers' gather
+    // (a few dozen nodes: latency), the ghost nodes' displacements (as the halo, not hidden), and the whole
+    // displacement on one step in whole_every.
     const double most_owned = static_cast<double>(*std::max_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
     const double update = costs.update_per_step_s * most_owned / nodes;
-    const double step = costs.evaluations_per_step * evaluation + update + costs.repeated_per_step_s;
+    const double whole = 2.0 * std::ceil(std::log2(n)) * latency_s + gather_bytes / bandwidth;
+    const double exchanges = 4.0 * reduction + halo + (whole_every > 0 ? whole / static_cast<double>(whole_every) : 0.0);
+    const double step = costs.evaluations_per_step * evaluation + update + costs.repeated_per_step_s + exchanges;
     fmt::print("| {} | {:.3f} | {:.0f} / {:.0f} | {:.0f}% | {} | {:.1f} | {:.0f} | {:.3f} | {:.1f}x |\n", n, imbalance,
                mean_ghosts, most_ghosts, 100.0 * boundary_share, neighbours, halo_bytes / 1e3, gather_bytes / 1e3,
                step * 1e3, one_rank / step);

@@ -36,6 +36,7 @@ class ProgressWriter final : public OutputWriter {
   std::string name() const override { return "progress"; }
   void before_run(const StepRecord& initial) override { after_step(initial); }
   void after_step(const StepRecord& step) override;
+  bool reads_displacement(long) const override { return false; }
 
  private:
   void complete(const StepRecord&) override { progress_.finish(); }

@@ -78,6 +78,7 @@ class InjectedFailure final : public StepMonitor {
     if (step.step >= step_)
       throw std::runtime_error("failure injected at step " + std::to_string(step.step) + " (MTLED_TEST_FAIL_RANK)");
   }
+  bool reads_displacement(long) const override { return false; }
 
  private:
   long step_;

@@ -88,7 +88,7 @@ void CpuEngine::add_correction(const ConstraintBlock& block, const std::vector<d
   mtled::add_correction(block, y, prediction_, model_->team());
 }
 
-StepSums CpuEngine::commit() {
+StepSums CpuEngine::commit(bool) {
   const ScopeTimer timer(update_s_);
   const int parts = parts_for(model_->node_count());
   std::fill(partial_.begin(), partial_.begin() + parts, Partial{});

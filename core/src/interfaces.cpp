@@ -13,6 +13,7 @@
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/interfaces/shape_functions.hpp"
 #include "mtled/interfaces/volumetric_treatment.hpp"
+#include "mtled/model.hpp"
 #include "mtled/monitor.hpp"
 
 namespace mtled {
@@ -22,6 +23,7 @@ MeshSource::~MeshSource() = default;
 ShapeFunctions::~ShapeFunctions() = default;
 Material::~Material() = default;
 Driver::~Driver() = default;
+bool Driver::nodes_read(const LoadState&, const ModelView&, std::vector<Index>&) const { return false; }
 BoundaryCondition::~BoundaryCondition() = default;
 NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
@@ -30,11 +32,17 @@ Index VolumetricTreatment::internal_forces(const Model&, std::span<const double>
                                            std::span<const PointRange>) {
   throw std::logic_error("this volumetric treatment sums only over every integration point");
 }
+std::vector<PointRange> VolumetricTreatment::points_read(const Model& model, std::span<const PointRange>) {
+  const std::span<const PointRange> every = model.every_point();
+  return {every.begin(), every.end()};
+}
 StepMonitor::~StepMonitor() = default;
+bool StepMonitor::reads_displacement(long) const { return true; }
 StepControl::~StepControl() = default;
 DiscreteSystem::~DiscreteSystem() = default;
 StepEngine::~StepEngine() = default;
 std::vector<int> StepEngine::cell_groups(const TetMesh&) { return {}; }
+std::span<const double> StepEngine::displacement_at(std::span<const Index>) { return displacement(); }
 
 IncrementSums DiscreteSystem::evaluate_forces(bool increment_sums) {
   const auto u = displacement();

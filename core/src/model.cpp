@@ -515,6 +515,11 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f) con
   return internal_forces(u, f, every_point());
 }
 
+std::vector<PointRange> Model::points_read(std::span<const PointRange> ranges) const {
+  if (volumetric_) return volumetric_->points_read(*this, ranges);
+  return {ranges.begin(), ranges.end()};
+}
+
 Index Model::internal_forces(std::span<const double> u, std::span<double> f, std::span<const PointRange> ranges,
                              const std::function<void()>& progress) const {
   if (volumetric_) {

@@ -33,6 +33,16 @@ Mat3 ModelView::deformation_gradient(Index ip, std::span<const double> u) const 
   return model_->deformation_gradient(ip, u);
 }
 
+void ModelView::append_point_support(Index ip, std::vector<Index>& nodes) const {
+  const GradientRows& rows = model_->ip_supports();
+  for (int k = 0; k < rows.size(ip); ++k) nodes.push_back(rows.node(ip, k));
+}
+
+void ModelView::append_node_support(Index node, std::vector<Index>& nodes) const {
+  const SupportRows& rows = *interpolation_;
+  nodes.insert(nodes.end(), rows.nodes.begin() + rows.offsets[node], rows.nodes.begin() + rows.offsets[node + 1]);
+}
+
 std::vector<double> ModelView::lumped_mass() const { return model_->lumped_mass(); }
 
 std::vector<double> ModelView::explicit_node_stiffness() const {

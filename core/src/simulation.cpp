@@ -217,8 +217,23 @@ void Simulation::external_forces(std::span<double> f) {
       for (int c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(set->nodes[k]) + c] += set->values[k][c];
 }
 
+std::span<const double> Simulation::drivers_reads() {
+  nodes_read_.clear();
+  for (const Driver* driver : drivers_)
+    if (!driver->nodes_read(load_, model_->view(), nodes_read_)) return displacement();
+  std::sort(nodes_read_.begin(), nodes_read_.end());
+  nodes_read_.erase(std::unique(nodes_read_.begin(), nodes_read_.end()), nodes_read_.end());
+  return engine_->displacement_at(nodes_read_);
+}
+
+bool Simulation::monitors_read(long step) const {
+  return std::any_of(monitors_.begin(), monitors_.end(),
+                     [step](const auto& monitor) { return monitor->reads_displacement(step); });
+}
+
 void Simulation::update_drivers() {
-  for (Driver* driver : drivers_) driver->update(load_, model_->view(), displacement());
+  const std::span<const double> u = drivers_reads();
+  for (Driver* driver : drivers_) driver->update(load_, model_->view(), u);
   constraint_system_->update(constraint_sets_, mass_, mass_changed_);
   mass_changed_ = false;
 }
@@ -272,7 +287,8 @@ StepSums Simulation::advance(double alpha, double beta, double new_time, double 
     not_finite(bad, u[static_cast<std::size_t>(bad)], new_time);
   }
   project(new_time, new_load_fraction, alpha);
-  sums_ = engine_->commit();
+  displacement_whole_ = monitors_read(load_.step);
+  sums_ = engine_->commit(displacement_whole_);
   return sums_;
 }
 
@@ -282,7 +298,8 @@ void Simulation::complete_step(std::span<double> u_new, double new_time, double 
   engine_->set_prediction(u_new);
   project(new_time, new_load_fraction, alpha);
   engine_->prediction(u_new);  // handed back corrected
-  sums_ = engine_->commit();
+  displacement_whole_ = monitors_read(load_.step);
+  sums_ = engine_->commit(displacement_whole_);
 }
 
 StepRecord Simulation::last_step() const {
@@ -293,7 +310,7 @@ StepRecord Simulation::last_step() const {
   r.previous_step_size = previous_step_size_;
   r.load_fraction = load_.load_fraction;
   r.steady_states = steady_states_;
-  r.u = displacement();
+  if (displacement_whole_) r.u = displacement();
   r.mass = mass_;
   r.sums = sums_;
   r.model = &model_->view();
@@ -327,16 +344,28 @@ void Simulation::run() {
   stable_step_margin_ = integrator_->report().stable_step_margin;
   const StepRecord initial = last_step();
   for (const auto& monitor : monitors_) monitor->before_run(initial);
-  while (!integrator_->finished(*this)) {
-    integrator_->step(*this);
-    StepRecord step = last_step();
-    step.control = this;
-    for (const auto& monitor : monitors_) monitor->after_step(step);
+  try {
+    while (!integrator_->finished(*this)) {
+      integrator_->step(*this);
+      StepRecord step = last_step();
+      step.control = this;
+      for (const auto& monitor : monitors_) monitor->after_step(step);
+    }
+  } catch (const InstabilityError&) {
+    share_state();  // every process finds an instability alike; the writers then read the last states
+    throw;
   }
+  share_state();
   if (load_.step > 0) {
     const StepRecord last = last_step();
     for (const auto& monitor : monitors_) monitor->after_run(last);
   }
+}
+
+void Simulation::share_state() {
+  engine_->displacement();
+  engine_->previous_displacement();
+  displacement_whole_ = true;
 }
 
 // The integrators read stable_time_step() before every step and re-plan theirs when it changed.

@@ -136,7 +136,7 @@ SnapshotWriter::SnapshotWriter(const OutputFolder& folder, const Parameters& out
 void SnapshotWriter::before_run(const StepRecord& initial) { snapshot(initial); }  // the series starts with it
 
 void SnapshotWriter::after_step(const StepRecord& step) {
-  if (step.step % every_ == 0 && step.step > 0) snapshot(step);
+  if (reads_displacement(step.step)) snapshot(step);
 }
 
 // ... and ends with the final state, which the run's last step need not be a multiple of every_steps to reach.

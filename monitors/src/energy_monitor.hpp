@@ -10,6 +10,7 @@ class EnergyMonitor final : public StepMonitor {
  public:
   std::string name() const override { return "energy"; }
   void after_step(const StepRecord& step) override;
+  bool reads_displacement(long) const override { return false; }
   json report() const override;
 
  private:

@@ -28,8 +28,9 @@ class InversionMonitor final : public StepMonitor {
   InversionMonitor(long every, bool stop) : every_(every), stop_(stop) {}
   std::string name() const override { return "inversion"; }
   void after_step(const StepRecord& step) override {
-    if (step.step % every_ == 0) check(step);
+    if (reads_displacement(step.step)) check(step);
   }
+  bool reads_displacement(long step) const override { return step % every_ == 0; }
   void after_run(const StepRecord& last) override {
     if (last_checked_ != last.step) check(last);
   }

@@ -25,8 +25,9 @@ class StableStepMonitor final : public StepMonitor {
       : every_(every), iterations_(iterations), perturbation_length_(perturbation_length), adapt_(adapt) {}
   std::string name() const override { return "stable_step"; }
   void after_step(const StepRecord& step) override {
-    if (step.step == 1 || step.step % every_ == 0) check(step);
+    if (reads_displacement(step.step)) check(step);
   }
+  bool reads_displacement(long step) const override { return step == 1 || step % every_ == 0; }
   json report() const override;
 
  private:

@@ -14,6 +14,7 @@ class NodeSetBoundary : public BoundaryCondition {
 
   void setup(const ModelView& model) override;
   void update(const LoadState& load, const ModelView& model, std::span<const double> u) override;
+  bool nodes_read(const LoadState&, const ModelView&, std::vector<Index>&) const override { return true; }  // none
   std::vector<NodalConstraints*> constraints() override { return {&set_}; }
 
  private:

@@ -162,6 +162,26 @@ class KinematicNeedle final : public NeedleModel {
       for (std::size_t k = 0; k < set->constraints.size(); ++k) set->constraints.values[k] = prescribed(*set, k, advance);
   }
 
+  // What update() reads: before the puncture the supports of the points around the tip; the supports of the
+  // candidates the capture looks at (up to the first the tip has not reached; every remaining one under
+  // since_capture, where reaching depends on their displacement).
+  bool nodes_read(const LoadState& load, const ModelView& model, std::vector<Index>& nodes) const override {
+    const double advance = load.load_fraction * path_.depth;
+    if (!punctured_) tip_strain_.append_nodes_read(model, path_.tip(advance), nodes);
+    for (std::size_t k = next_candidate_; k < candidates_.size(); ++k) {
+      const Index n = candidates_[k];
+      if (captured_[n]) continue;
+      model.append_node_support(n, nodes);
+      if (from_reference_ && advance < path_.axial(model.nodes()[n])) break;
+    }
+    for (std::size_t k = next_point_; k < shaft_candidates_.size(); ++k) {
+      const ShaftPoint& point = shaft_candidates_[k];
+      nodes.insert(nodes.end(), point.support.begin(), point.support.end());
+      if (from_reference_ && advance < path_.axial(point.position)) break;
+    }
+    return true;
+  }
+
   std::vector<NodalConstraints*> constraints() override {
     if (shaft_surface_) return {&nodes_.constraints, &shaft_.constraints};
     return {&nodes_.constraints};

@@ -218,6 +218,11 @@ void TipStrainWatch::setup(const NeedlePath& path, const ModelView& model, doubl
     if ((model.ip_positions()[ip] - path.entry).norm() <= radius + path.depth) watched_.push_back(ip);
 }
 
+void TipStrainWatch::append_nodes_read(const ModelView& model, const Vec3& tip, std::vector<Index>& nodes) const {
+  for (Index ip : watched_)
+    if ((model.ip_positions()[ip] - tip).norm() <= radius_) model.append_point_support(ip, nodes);
+}
+
 double TipStrainWatch::largest(const ModelView& model, std::span<const double> u, const Vec3& tip) const {
   double largest = 0.0;
   for (Index ip : watched_) {

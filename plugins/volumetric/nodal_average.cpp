@@ -61,6 +61,9 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   }
 
   bool sums_over_ranges() const override { return true; }
+  std::vector<PointRange> points_read(const Model& model, std::span<const PointRange> ranges) override {
+    return region_of(model, ranges).far;
+  }
 
   Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f,
                         std::span<const PointRange> ranges) override {

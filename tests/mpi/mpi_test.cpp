@@ -72,6 +72,11 @@ TEST_P(MpiRun, TheNeedleInsertionIsTheOneProcessAnswer) {
   const int ranks = GetParam();
   const std::string name = "needle_on_" + std::to_string(ranks);
   const fs::path scene = needle_scene(name);
+  // Snapshots every 40 steps: rank 0's writer reads the whole displacement then, and the other ranks, which do not
+  // write, must gather it with it.
+  json document = json::parse(test::read_text(scene));
+  document["output"] = {{"every_steps", 40}};
+  test::write_text(scene, document.dump(2));
   const fs::path one = folder(name + "_serial"), several = folder(name);
   const auto serial = run(scene, one, 0);
   ASSERT_EQ(serial.exit_code, 0) << serial.output;
@@ -96,6 +101,18 @@ TEST_P(MpiRun, TheNeedleInsertionIsTheOneProcessAnswer) {
   EXPECT_GT(fa, 0.0);
   EXPECT_NEAR(fb, fa, 1e-12 * fa);
   EXPECT_LE(largest_nrmse(several, one), 1e-12);
+  // Each step brings a rank its ghost nodes' displacements only; the whole displacement is gathered for the
+  // snapshots (every 40 steps), the fold checks (every 100), the stable-step estimates (steps 1 and 2,000) and the
+  // end; the needle's reads (a few dozen nodes around its tip and path) are gathered before each update.
+  const long steps = b["steps"];
+  const json& gathers = b["backend"]["displacement_gathers"];
+  EXPECT_LE(gathers["whole"].get<long>(), steps / 40 + steps / 100 + 3) << gathers.dump();
+  EXPECT_GT(gathers["driver_nodes"].get<long>(), 0) << gathers.dump();
+  EXPECT_LT(gathers["driver_nodes"].get<long>(), steps * 599 / 4) << gathers.dump();
+  EXPECT_LT(partition["ghost_bytes_per_step"].get<long>(), partition["whole_gather_bytes"].get<long>());
+  EXPECT_GT(partition["ghost_bytes_per_step"].get<long>(), 0);
+  // The snapshots are the one process's too.
+  EXPECT_EQ(test::read_text(several / "series.pvd"), test::read_text(one / "series.pvd"));
 }
 
 TEST_P(MpiRun, TheCubeIsTheOneProcessAnswerAndTheSameOnARepeat) {
@@ -137,6 +154,31 @@ TEST_P(MpiRun, TheAveragedDilatationIsDividedAndIsTheOneProcessAnswer) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Ranks, MpiRun, ::testing::Values(2, 3));
+
+// A run every rank finds unstable (the cube at ten times its stable step inverts a point at step 5): the ranks
+// gather the last good state, which only rank 0 writes, and end alike with exit 3, never a hang.
+TEST(MpiFailure, AnUnstableRunWritesTheLastGoodStateLikeOneProcess) {
+  if (!have_mpirun()) GTEST_SKIP() << "mpirun is not installed";
+  const fs::path one = folder("unstable_serial"), several = folder("unstable");
+  const std::vector<std::string> unstable = {"--set", "/integrator/time_step_factor=10", "--set",
+                                             "/monitors/stable_step_every_steps=0"};
+  auto arguments = [&](const fs::path& out) {
+    std::vector<std::string> a = {"run", cube_scene().string(), "-o", out.string(), "--threads", "1", "--no-progress"};
+    a.insert(a.end(), unstable.begin(), unstable.end());
+    return a;
+  };
+  const auto serial = test::run_mtled(arguments(one), kEnvironment);
+  ASSERT_EQ(serial.exit_code, 3) << serial.output;
+  const auto parallel = test::run_mtled(arguments(several), kEnvironment, launcher(2));
+  ASSERT_EQ(parallel.exit_code, 3) << parallel.output;
+  const json a = test::read_json(one / "summary.json"), b = test::read_json(several / "summary.json");
+  EXPECT_EQ(b["status"], "unstable");
+  EXPECT_EQ(b["diagnostic"]["what"], a["diagnostic"]["what"]);
+  EXPECT_EQ(b["diagnostic"]["step"], a["diagnostic"]["step"]);
+  EXPECT_FALSE(fs::exists(several / "result.vtu"));
+  // u_(n-1) (the state before the inverting step), gathered from every rank: one process's up to round-off.
+  EXPECT_LE(largest_nrmse(several / "last_good_state.vtu", one / "last_good_state.vtu"), 1e-12);
+}
 
 TEST(MpiFailure, OneFailingRankEndsTheRunWithAnErrorNotAHang) {
   if (!have_mpirun()) GTEST_SKIP() << "mpirun is not installed";

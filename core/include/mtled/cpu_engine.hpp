@@ -28,7 +28,7 @@ class CpuEngine : public StepEngine {
   void prediction(std::span<double> out) override;
   void constrained_values(const ConstraintBlock& block, std::vector<double>& out) override;
   void add_correction(const ConstraintBlock& block, const std::vector<double>& y) override;
-  StepSums commit() override;
+  StepSums commit(bool whole_displacement) override;
   Index internal_forces(std::span<const double> u, std::span<double> f) override;
 
  protected:

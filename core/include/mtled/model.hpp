@@ -117,6 +117,9 @@ class Model {
   // (VolumetricTreatment::sums_over_ranges; std::logic_error for one that does not).
   Index internal_forces(std::span<const double> u, std::span<double> f, std::span<const PointRange> ranges,
                         const std::function<void()>& progress = {}) const;
+  // The integration points whose deformation gradients internal_forces(u, f, ranges) computes: the ranges, or with
+  // a volumetric treatment those its averages use. Their supports are the nodes of u the evaluation reads.
+  std::vector<PointRange> points_read(std::span<const PointRange> ranges) const;
   double strain_energy(std::span<const double> u) const;
   // The fewest bytes one internal_forces() call must move through memory: the rows once (padding included; the
   // scatter re-reads them from the cache), each point's weight, mean correction and material, the per-node

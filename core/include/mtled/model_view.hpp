@@ -45,6 +45,10 @@ class ModelView {
   const std::vector<Index>& ip_tets() const { return *ip_tets_; }          // the background tet each lies in
   const Material& ip_material(Index ip) const;
   Mat3 deformation_gradient(Index ip, std::span<const double> u) const;
+  // Appends the nodes of point ip's support: the u_I deformation_gradient(ip, u) reads.
+  void append_point_support(Index ip, std::vector<Index>& nodes) const;
+  // Appends the nodes of node J's interpolation support: the u_I interpolate_node(J, u) reads.
+  void append_node_support(Index node, std::vector<Index>& nodes) const;
 
   // ---- mass and stiffness
   // Lumped mass per node (kg) for the unscaled densities.

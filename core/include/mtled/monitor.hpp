@@ -38,7 +38,7 @@ struct StepRecord {
   double previous_step_size = 0.0;  // t(n) - t(n-1); 0 at the first step
   double load_fraction = 0.0;       // at n + 1
   long steady_states = 0;           // equilibria the integrator reported so far (relaxed load increments)
-  std::span<const double> u;     // displacements at n + 1 (3 per node)
+  std::span<const double> u;     // displacements at n + 1 (3 per node); empty on steps no monitor reads it
   std::span<const double> mass;  // per node, as the integrator uses it
   StepSums sums;                 // the step's reductions over the unknowns (increments, energies)
   const ModelView* model = nullptr;
@@ -79,6 +79,10 @@ class StepMonitor {
   virtual void before_run(const StepRecord&) {}
   // Throws InstabilityError (naming the step, what and where) to stop the run.
   virtual void after_step(const StepRecord& step) = 0;
+  // Whether after_step reads StepRecord::u at this step (n + 1). An engine that spreads the nodes over processes
+  // gathers the whole displacement only on steps some monitor reads it, and StepRecord::u is empty on the others
+  // (before_run and after_run always have it). The default: every step.
+  virtual bool reads_displacement(long step) const;
   // After the run's last step (the loop ended normally); may throw as after_step does.
   virtual void after_run(const StepRecord&) {}
   // Its record for summary.json's "monitors" (null: none; writers have none).

@@ -82,6 +82,13 @@ class Simulation final : public DiscreteSystem, private StepControl {
                    std::vector<std::shared_ptr<const Material>> materials, std::vector<int> cell_groups);
   void build_drivers(const Scene& scene, PluginCatalog& catalog);
   void update_drivers();
+  // u_n where the drivers' coming updates read it (all of it when one of them does not say).
+  std::span<const double> drivers_reads();
+  // Whether some monitor reads StepRecord::u at `step`.
+  bool monitors_read(long step) const;
+  // Makes u_n and u_(n-1) whole on every process (an engine that spreads the nodes brings them then): what the
+  // writers read after the loop, on every outcome the ranks reach alike.
+  void share_state();
   // The step's end up to the new state: the load state moves on, the drivers update, the constraints correct the
   // engine's prediction.
   void project(double new_time, double new_load_fraction, double alpha);
@@ -116,6 +123,8 @@ class Simulation final : public DiscreteSystem, private StepControl {
   double time_step_factor_ = 1.0;  // the integrator's, read once it is initialised
   double stable_step_margin_ = 0.9;  // the integrator's
   std::vector<std::shared_ptr<StepMonitor>> monitors_;
+  std::vector<Index> nodes_read_;  // the drivers' reads at this update
+  bool displacement_whole_ = true;  // u_n is whole: the monitors read it this step, or the run has ended
 };
 
 }  // namespace mtled

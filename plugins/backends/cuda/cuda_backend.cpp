@@ -258,7 +258,7 @@ class CudaBackend final : public StepEngine {
     check(cudaGetLastError(), "launching the constraint correction");
   }
 
-  StepSums commit() override {
+  StepSums commit(bool) override {
     const ScopeTimer timed(engine_s_);
     cuda::step_sums(nodes_, prediction_.data(), free_.data(), u_.data(), u_previous_.data(), mass_.data(),
                     partials_.data(), sums_.data(), stream_);

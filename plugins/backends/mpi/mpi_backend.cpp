@@ -4,10 +4,11 @@
 // contributions to the nodes other ranks own (the points at the partition boundary first, the interior computed
 // while those travel) and sums those it receives for its own nodes in rank order. It then updates its own nodes: the
 // prediction, its part of the constraint projection's products and the step's sums, each global value reduced in rank
-// order so that every rank holds the same bits; last, every rank gathers the new displacement of every node, which
-// the drivers, the monitors and the next force evaluation read. The constraint solve, the drivers and the monitors run
-// on every rank on that same state, and only rank 0 writes. docs/mpi.md gives the design, its costs and what it does
-// not distribute yet.
+// order so that every rank holds the same bits; last, it receives the new displacements of its ghost nodes (those
+// its forces read that other ranks own). The drivers' reads are gathered before they update (the nodes they name, or
+// all), and the whole displacement on the steps a monitor on some rank reads it. The constraint solve, the drivers
+// and the monitors run on every rank on the same values, and only rank 0 writes. docs/mpi.md gives the design, its
+// costs and what it does not distribute yet.
 #include <mpi.h>
 
 #include <algorithm>
@@ -50,8 +51,9 @@ class MpiBackend final : public CpuEngine {
         "The processes of an MPI run (mpirun -np N mtled run SCENE, chosen by the command line on more than one "
         "rank): METIS partitions the background cells, each rank computes its cells' integration points on its "
         "threads (--threads per rank) and the ranks exchange their contributions to each other's nodes every force "
-        "evaluation; each rank updates its own nodes and the ranks then gather the new displacements; the constraint "
-        "solve, the drivers and the monitors run on every rank on the same state, and rank 0 writes the outputs.");
+        "evaluation; each rank updates its own nodes and receives its ghost nodes' new displacements; the constraint "
+        "solve, the drivers and the monitors run on every rank on the same values (the nodes the drivers read, and "
+        "the whole displacement on the steps the monitors read it, gathered), and rank 0 writes the outputs.");
   }
   explicit MpiBackend(const Parameters& parameters) {
     int started = 0;
@@ -99,6 +101,7 @@ class MpiBackend final : public CpuEngine {
     };
     points_ = {group_start(rank_ * (kLayers + 1)), group_start((rank_ + 1) * (kLayers + 1))};
     build_exchange(model);
+    build_ghosts(model);
     split_points(model);
     record_partition(model);
   }
@@ -112,6 +115,7 @@ class MpiBackend final : public CpuEngine {
     out["partition"] = partition_;
     if (whole_on_every_rank_) out["forces"] = "whole on every rank (volumetric treatment)";
     out["exchange_s"] = exchange_s_;  // rank 0's: sends, receives, its sums, the gathers and the step's reductions
+    out["displacement_gathers"] = {{"whole", whole_gathers_}, {"driver_nodes", driver_nodes_gathered_}};
     return out;
   }
 
@@ -204,8 +208,9 @@ class MpiBackend final : public CpuEngine {
     }
   }
 
-  // The rank's own nodes' sums, combined in rank order; then every rank gathers u_(n+1).
-  StepSums commit() override {
+  // The rank's own nodes' sums, combined in rank order; then each rank receives its ghost nodes' u_(n+1), or every
+  // node's when some rank's monitors read it this step.
+  StepSums commit(bool whole_displacement) override {
     const ScopeTimer timer(update_s_);
     StepSums mine;
     double fastest = 0.0;
@@ -214,19 +219,81 @@ class MpiBackend final : public CpuEngine {
                     mass_.data(), mine, fastest);
     u_previous_.swap(u_);
     u_.swap(prediction_);
-    // The sums travel with the displacements: one exchange.
+    previous_whole_ = whole_;
+    whole_ = false;
+    // The sums and whether this rank's monitors read the whole displacement: one exchange.
     const auto start = Clock::now();
-    const double values[kStepSumValues] = {mine.largest_increment, mine.largest_displacement, mine.projection_energy,
-                                           mine.kinetic_product,   fastest,  static_cast<double>(mine.fastest_node)};
-    gather_owned(u_, values);
-    exchange_s_ += seconds_since(start);
+    const double values[kStepValues] = {mine.largest_increment, mine.largest_displacement, mine.projection_energy,
+                                        mine.kinetic_product,   fastest,
+                                        static_cast<double>(mine.fastest_node), whole_displacement ? 1.0 : 0.0};
+    const std::vector<double>& all = from_every_rank(values);
     StepSums sums;
     double fastest_energy = 0.0;
+    bool whole = false;
     for (int q = 0; q < ranks_; ++q) {
-      const double* v = rank_extra(q);
+      const double* v = &all[kStepValues * static_cast<std::size_t>(q)];
       combine_step_sums(StepSums{v[0], v[1], v[2], v[3], static_cast<Index>(v[5])}, v[4], sums, fastest_energy);
+      whole = whole || v[6] != 0.0;
     }
+    if (whole) {
+      gather_owned(u_);
+      whole_ = true;
+      ++whole_gathers_;
+    } else {
+      exchange_ghosts();
+    }
+    exchange_s_ += seconds_since(start);
     return sums;
+  }
+
+  void set_state(std::span<const double> u, std::span<const double> u_previous) override {
+    CpuEngine::set_state(u, u_previous);
+    whole_ = previous_whole_ = true;
+  }
+
+  // Every node's u_n, gathered when the last commit brought only the ghost nodes (every rank calls it alike).
+  std::span<const double> displacement() override {
+    if (!whole_) {
+      const auto start = Clock::now();
+      gather_owned(u_);
+      whole_ = true;
+      ++whole_gathers_;
+      exchange_s_ += seconds_since(start);
+    }
+    return u_;
+  }
+  std::span<const double> previous_displacement() override {
+    if (!previous_whole_) {
+      gather_owned(u_previous_);
+      previous_whole_ = true;
+    }
+    return u_previous_;
+  }
+
+  // u_n at `nodes` (the same list on every rank): each rank's own among them, gathered in list order.
+  std::span<const double> displacement_at(std::span<const Index> nodes) override {
+    if (whole_ || nodes.empty()) return u_;
+    const auto start = Clock::now();
+    subset_counts_.assign(static_cast<std::size_t>(ranks_), 0);
+    std::size_t packed = 0;
+    for (const Index n : nodes) {
+      const int q = owner_[static_cast<std::size_t>(n)];
+      subset_counts_[static_cast<std::size_t>(q)] += 3;
+      if (q != rank_) continue;
+      for (std::size_t c = 0; c < 3; ++c) owned_sum_[packed++] = u_[3 * static_cast<std::size_t>(n) + c];
+    }
+    subset_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
+    std::partial_sum(subset_counts_.begin(), subset_counts_.end() - 1, subset_offsets_.begin() + 1);
+    MPI_Allgatherv(owned_sum_.data(), static_cast<int>(packed), MPI_DOUBLE, gathered_.data(), subset_counts_.data(),
+                   subset_offsets_.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    for (const Index n : nodes) {  // each rank's values in list order
+      int& next = subset_offsets_[static_cast<std::size_t>(owner_[static_cast<std::size_t>(n)])];
+      for (std::size_t c = 0; c < 3; ++c) u_[3 * static_cast<std::size_t>(n) + c] = gathered_[static_cast<std::size_t>(next) + c];
+      next += 3;
+    }
+    driver_nodes_gathered_ += static_cast<std::int64_t>(nodes.size());
+    exchange_s_ += seconds_since(start);
+    return u_;
   }
 
  protected:
@@ -307,41 +374,58 @@ class MpiBackend final : public CpuEngine {
   }
 
  private:
-  // The lists each force evaluation uses: the nodes this rank's points support that other ranks own (sent), the
-  // nodes it owns that other ranks' points support (received, in the sender's order), and every rank's owned nodes
-  // in the gathered vector's order.
+  // Per other rank q: the marked nodes q owns (theirs[q], ascending) and the nodes this rank owns that q marked
+  // (mine[q], in q's order), with room for 3 values each: who sends what to whom when every rank needs the values
+  // of the nodes it marked.
+  struct NodeExchange {
+    std::vector<std::vector<Index>> theirs, mine;
+    std::vector<std::vector<double>> their_values, my_values;
+    std::int64_t their_count() const {
+      std::int64_t n = 0;
+      for (const auto& list : theirs) n += static_cast<std::int64_t>(list.size());
+      return n;
+    }
+  };
+  NodeExchange exchange_of(const std::vector<char>& marked) const {
+    NodeExchange x;
+    x.theirs.assign(static_cast<std::size_t>(ranks_), {});
+    for (std::size_t i = 0; i < marked.size(); ++i)
+      if (marked[i] && owner_[i] != rank_) x.theirs[static_cast<std::size_t>(owner_[i])].push_back(static_cast<Index>(i));
+    std::vector<int> their_counts(static_cast<std::size_t>(ranks_)), my_counts(static_cast<std::size_t>(ranks_));
+    for (int q = 0; q < ranks_; ++q) their_counts[static_cast<std::size_t>(q)] = static_cast<int>(x.theirs[static_cast<std::size_t>(q)].size());
+    MPI_Alltoall(their_counts.data(), 1, MPI_INT, my_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
+    std::vector<int> their_offsets(static_cast<std::size_t>(ranks_) + 1, 0), my_offsets(static_cast<std::size_t>(ranks_) + 1, 0);
+    std::partial_sum(their_counts.begin(), their_counts.end(), their_offsets.begin() + 1);
+    std::partial_sum(my_counts.begin(), my_counts.end(), my_offsets.begin() + 1);
+    std::vector<std::int64_t> sent, received(static_cast<std::size_t>(my_offsets.back()));
+    for (const auto& list : x.theirs) sent.insert(sent.end(), list.begin(), list.end());
+    MPI_Alltoallv(sent.data(), their_counts.data(), their_offsets.data(), MPI_INT64_T, received.data(),
+                  my_counts.data(), my_offsets.data(), MPI_INT64_T, MPI_COMM_WORLD);
+    x.mine.assign(static_cast<std::size_t>(ranks_), {});
+    x.their_values.resize(static_cast<std::size_t>(ranks_));
+    x.my_values.resize(static_cast<std::size_t>(ranks_));
+    for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
+      x.mine[q].assign(received.begin() + my_offsets[q], received.begin() + my_offsets[q + 1]);
+      x.their_values[q].resize(3 * x.theirs[q].size());
+      x.my_values[q].resize(3 * x.mine[q].size());
+    }
+    return x;
+  }
+
+  // The force exchange (the nodes this rank's points support: it sends its contributions to their owners and
+  // receives the others' for its own), and every rank's owned nodes in the gathered vector's order.
   void build_exchange(const Model& model) {
     const GradientRows& rows = model.ip_supports();
     const std::size_t nodes = static_cast<std::size_t>(model.node_count());
     std::vector<char> supported(nodes, 0);
     for (Index p = points_.first; p < points_.second; ++p)
       for (int k = 0; k < rows.size(p); ++k) supported[static_cast<std::size_t>(rows.node(p, k))] = 1;
-    send_nodes_.assign(static_cast<std::size_t>(ranks_), {});
-    for (std::size_t i = 0; i < nodes; ++i)
-      if (supported[i] && owner_[i] != rank_) send_nodes_[static_cast<std::size_t>(owner_[i])].push_back(static_cast<Index>(i));
-    std::vector<int> send_counts(static_cast<std::size_t>(ranks_)), receive_counts(static_cast<std::size_t>(ranks_));
-    for (int q = 0; q < ranks_; ++q) send_counts[static_cast<std::size_t>(q)] = static_cast<int>(send_nodes_[static_cast<std::size_t>(q)].size());
-    MPI_Alltoall(send_counts.data(), 1, MPI_INT, receive_counts.data(), 1, MPI_INT, MPI_COMM_WORLD);
-    std::vector<int> send_offsets(static_cast<std::size_t>(ranks_) + 1, 0), receive_offsets(static_cast<std::size_t>(ranks_) + 1, 0);
-    std::partial_sum(send_counts.begin(), send_counts.end(), send_offsets.begin() + 1);
-    std::partial_sum(receive_counts.begin(), receive_counts.end(), receive_offsets.begin() + 1);
-    std::vector<std::int64_t> sent, received(static_cast<std::size_t>(receive_offsets.back()));
-    for (const auto& list : send_nodes_) sent.insert(sent.end(), list.begin(), list.end());
-    MPI_Alltoallv(sent.data(), send_counts.data(), send_offsets.data(), MPI_INT64_T, received.data(),
-                  receive_counts.data(), receive_offsets.data(), MPI_INT64_T, MPI_COMM_WORLD);
-    receive_nodes_.assign(static_cast<std::size_t>(ranks_), {});
-    for (int q = 0; q < ranks_; ++q)
-      receive_nodes_[static_cast<std::size_t>(q)].assign(received.begin() + receive_offsets[static_cast<std::size_t>(q)],
-                                                          received.begin() + receive_offsets[static_cast<std::size_t>(q) + 1]);
+    forces_ = exchange_of(supported);
     // The gathered vector: rank 0's owned nodes in ascending order, then rank 1's, ...
     gather_counts_.assign(static_cast<std::size_t>(ranks_), 0);
     for (const int o : owner_) gather_counts_[static_cast<std::size_t>(o)] += 3;
     gather_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
     std::partial_sum(gather_counts_.begin(), gather_counts_.end() - 1, gather_offsets_.begin() + 1);
-    step_gather_counts_ = gather_counts_;
-    for (int& count : step_gather_counts_) count += kStepSumValues;
-    step_gather_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
-    std::partial_sum(step_gather_counts_.begin(), step_gather_counts_.end() - 1, step_gather_offsets_.begin() + 1);
     gather_order_.clear();
     for (int q = 0; q < ranks_; ++q)
       for (std::size_t i = 0; i < nodes; ++i)
@@ -351,15 +435,23 @@ class MpiBackend final : public CpuEngine {
                   gather_order_.begin() + static_cast<std::ptrdiff_t>(mine) + gather_counts_[static_cast<std::size_t>(rank_)] / 3);
     slot_.assign(nodes, -1);
     for (std::size_t k = 0; k < owned_.size(); ++k) slot_[static_cast<std::size_t>(owned_[k])] = static_cast<Index>(k);
-    send_buffer_.resize(static_cast<std::size_t>(ranks_));
-    receive_buffer_.resize(static_cast<std::size_t>(ranks_));
-    for (int q = 0; q < ranks_; ++q) {
-      send_buffer_[static_cast<std::size_t>(q)].resize(3 * send_nodes_[static_cast<std::size_t>(q)].size());
-      receive_buffer_[static_cast<std::size_t>(q)].resize(3 * receive_nodes_[static_cast<std::size_t>(q)].size());
-    }
-    owned_sum_.resize(3 * owned_.size() + kStepSumValues);
-    gathered_.resize(3 * nodes + kStepSumValues * static_cast<std::size_t>(ranks_));
+    owned_sum_.resize(3 * owned_.size());
+    gathered_.resize(3 * nodes);
     requests_.reserve(2 * static_cast<std::size_t>(ranks_));
+  }
+
+  // The ghost nodes: those other ranks own whose displacements this rank's force evaluation reads (its points'
+  // supports; with a volumetric treatment, the supports of every point whose F its averages use).
+  void build_ghosts(const Model& model) {
+    const GradientRows& rows = model.ip_supports();
+    const std::vector<PointRange> own{points_};
+    const std::vector<PointRange> read = whole_on_every_rank_ ? std::vector<PointRange>{{0, model.integration_point_count()}}
+                                                              : model.points_read(own);
+    std::vector<char> marked(static_cast<std::size_t>(model.node_count()), 0);
+    for (const PointRange& range : read)
+      for (Index p = range.first; p < range.second; ++p)
+        for (int k = 0; k < rows.size(p); ++k) marked[static_cast<std::size_t>(rows.node(p, k))] = 1;
+    ghosts_ = exchange_of(marked);
   }
 
   // The boundary points: those whose supports reach a node another rank owns, in blocks of consecutive points
@@ -393,23 +485,23 @@ class MpiBackend final : public CpuEngine {
   void post_receives() {
     requests_.clear();  // kept: no allocation in the time step
     for (int q = 0; q < ranks_; ++q) {
-      auto& in = receive_buffer_[static_cast<std::size_t>(q)];
+      auto& in = forces_.my_values[static_cast<std::size_t>(q)];
       if (in.empty()) continue;
       requests_.emplace_back();
-      MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, q, 0, MPI_COMM_WORLD, &requests_.back());
+      MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, q, kForceTag, MPI_COMM_WORLD, &requests_.back());
     }
   }
 
   // The boundary points' contributions to the nodes each other rank owns.
   void send_contributions() {
     for (int q = 0; q < ranks_; ++q) {
-      const auto& list = send_nodes_[static_cast<std::size_t>(q)];
-      auto& out = send_buffer_[static_cast<std::size_t>(q)];
+      const auto& list = forces_.theirs[static_cast<std::size_t>(q)];
+      auto& out = forces_.their_values[static_cast<std::size_t>(q)];
       if (list.empty()) continue;
       for (std::size_t k = 0; k < list.size(); ++k)
         for (std::size_t c = 0; c < 3; ++c) out[3 * k + c] = boundary_f_[3 * static_cast<std::size_t>(list[k]) + c];
       requests_.emplace_back();
-      MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, q, 0, MPI_COMM_WORLD, &requests_.back());
+      MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, q, kForceTag, MPI_COMM_WORLD, &requests_.back());
     }
   }
 
@@ -427,8 +519,8 @@ class MpiBackend final : public CpuEngine {
           }
         continue;
       }
-      const auto& list = receive_nodes_[static_cast<std::size_t>(q)];
-      const auto& in = receive_buffer_[static_cast<std::size_t>(q)];
+      const auto& list = forces_.mine[static_cast<std::size_t>(q)];
+      const auto& in = forces_.my_values[static_cast<std::size_t>(q)];
       for (std::size_t k = 0; k < list.size(); ++k) {
         const auto s = static_cast<std::size_t>(slot_[static_cast<std::size_t>(list[k])]);
         for (std::size_t c = 0; c < 3; ++c) owned_sum_[3 * s + c] += in[3 * k + c];
@@ -438,31 +530,43 @@ class MpiBackend final : public CpuEngine {
       for (std::size_t c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(owned_[k]) + c] = owned_sum_[3 * k + c];
   }
 
-  // v (3 per node), right at this rank's own nodes, becomes right at every node: each rank's own values gathered,
-  // with the step's sums (kStepSumValues) after them when given (every rank's, rank_extra(q), valid until the next
-  // gather).
-  void gather_owned(std::span<double> v, std::span<const double> step_sums = {}) {
-    const std::size_t own = 3 * owned_.size();
+  // v (3 per node), right at this rank's own nodes, becomes right at every node: each rank's own values gathered.
+  void gather_owned(std::span<double> v) {
     for (std::size_t k = 0; k < owned_.size(); ++k)
       for (std::size_t c = 0; c < 3; ++c) owned_sum_[3 * k + c] = v[3 * static_cast<std::size_t>(owned_[k]) + c];
-    std::copy(step_sums.begin(), step_sums.end(), owned_sum_.begin() + static_cast<std::ptrdiff_t>(own));
-    const int extra = static_cast<int>(step_sums.size());
-    const std::vector<int>& counts = extra > 0 ? step_gather_counts_ : gather_counts_;
-    const std::vector<int>& offsets = extra > 0 ? step_gather_offsets_ : gather_offsets_;
-    MPI_Allgatherv(owned_sum_.data(), static_cast<int>(own) + extra, MPI_DOUBLE, gathered_.data(), counts.data(),
-                   offsets.data(), MPI_DOUBLE, MPI_COMM_WORLD);
-    std::size_t k = 0;  // in gather_order_: rank 0's nodes, then rank 1's, ...
-    for (int q = 0; q < ranks_; ++q) {
-      const double* in = &gathered_[static_cast<std::size_t>(offsets[static_cast<std::size_t>(q)])];
-      for (int i = 0; i < gather_counts_[static_cast<std::size_t>(q)]; i += 3, ++k)
-        for (std::size_t c = 0; c < 3; ++c)
-          v[3 * static_cast<std::size_t>(gather_order_[k]) + c] = in[static_cast<std::size_t>(i) + c];
-    }
+    MPI_Allgatherv(owned_sum_.data(), static_cast<int>(3 * owned_.size()), MPI_DOUBLE, gathered_.data(),
+                   gather_counts_.data(), gather_offsets_.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    for (std::size_t k = 0; k < gather_order_.size(); ++k)  // rank 0's nodes, then rank 1's, ...
+      for (std::size_t c = 0; c < 3; ++c) v[3 * static_cast<std::size_t>(gather_order_[k]) + c] = gathered_[3 * k + c];
   }
-  // Rank q's step sums from the last gather_owned that carried them.
-  const double* rank_extra(int q) const {
-    const auto i = static_cast<std::size_t>(q);
-    return &gathered_[static_cast<std::size_t>(step_gather_offsets_[i] + gather_counts_[i])];
+
+  // u_ right at the ghost nodes as well: each rank sends its own nodes' values to the ranks whose forces read them.
+  void exchange_ghosts() {
+    requests_.clear();
+    for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
+      auto& in = ghosts_.their_values[q];
+      if (in.empty()) continue;
+      requests_.emplace_back();
+      MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, static_cast<int>(q), kGhostTag, MPI_COMM_WORLD,
+                &requests_.back());
+    }
+    for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
+      const auto& list = ghosts_.mine[q];
+      auto& out = ghosts_.my_values[q];
+      if (list.empty()) continue;
+      for (std::size_t k = 0; k < list.size(); ++k)
+        for (std::size_t c = 0; c < 3; ++c) out[3 * k + c] = u_[3 * static_cast<std::size_t>(list[k]) + c];
+      requests_.emplace_back();
+      MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, static_cast<int>(q), kGhostTag, MPI_COMM_WORLD,
+                &requests_.back());
+    }
+    MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
+    for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
+      const auto& list = ghosts_.theirs[q];
+      const auto& in = ghosts_.their_values[q];
+      for (std::size_t k = 0; k < list.size(); ++k)
+        for (std::size_t c = 0; c < 3; ++c) u_[3 * static_cast<std::size_t>(list[k]) + c] = in[3 * k + c];
+    }
   }
 
   static double seconds_since(Clock::time_point start) {
@@ -471,10 +575,9 @@ class MpiBackend final : public CpuEngine {
 
   // summary.json's "partition": points, owned and ghost nodes per rank, the imbalance, the bytes exchanged.
   void record_partition(const Model& model) {
-    std::int64_t ghosts = 0;
-    for (const auto& list : send_nodes_) ghosts += static_cast<std::int64_t>(list.size());
     const auto points = all_ranks(points_.second - points_.first, ranks_);
-    const auto ghost_nodes = all_ranks(ghosts, ranks_);
+    const auto ghost_nodes = all_ranks(ghosts_.their_count(), ranks_);
+    const auto halo_nodes = all_ranks(forces_.their_count(), ranks_);
     const auto owned = all_ranks(static_cast<std::int64_t>(owned_.size()), ranks_);
     const auto boundary = all_ranks(boundary_points_, ranks_);
     std::int64_t first = 0;
@@ -482,7 +585,7 @@ class MpiBackend final : public CpuEngine {
     const auto before_sending = all_ranks(first, ranks_);
     const double mean = static_cast<double>(model.integration_point_count()) / ranks_;
     const std::int64_t most = *std::max_element(points.begin(), points.end());
-    const std::int64_t sent = std::accumulate(ghost_nodes.begin(), ghost_nodes.end(), std::int64_t{0});
+    const auto total = [](const std::vector<std::int64_t>& v) { return std::accumulate(v.begin(), v.end(), std::int64_t{0}); };
     partition_ = {{"method", "METIS_PartMeshDual (tets sharing a face)"},
                   {"integration_points", points},
                   {"owned_nodes", owned},
@@ -490,21 +593,23 @@ class MpiBackend final : public CpuEngine {
                   {"boundary_points", boundary},
                   {"points_before_sending", before_sending},
                   {"imbalance", mean > 0.0 ? static_cast<double>(most) / mean : 1.0},
-                  {"halo_bytes_per_evaluation", 24 * sent},
-                  {"gather_bytes_per_step", 24 * model.node_count() * (ranks_ - 1)}};
+                  {"halo_bytes_per_evaluation", 24 * total(halo_nodes)},
+                  {"ghost_bytes_per_step", 24 * total(ghost_nodes)},
+                  {"whole_gather_bytes", 24 * model.node_count() * (ranks_ - 1)}};
   }
 
-  static constexpr int kStepSumValues = 6;  // StepSums and the fastest node's energy, as doubles
+  static constexpr int kStepValues = 7;  // StepSums, the fastest node's energy and the whole-gather flag, as doubles
+  static constexpr int kForceTag = 0, kGhostTag = 1;
   static constexpr std::int64_t kNoneIndex = std::numeric_limits<std::int64_t>::max();
   static constexpr int kLayers = 4;  // edges from the boundary told apart; a support spans one or two
   int rank_ = 0, ranks_ = 1;
   PointRange points_{0, 0};
   std::vector<int> owner_;  // per node: the rank that sums its force
-  std::vector<std::vector<Index>> send_nodes_, receive_nodes_;
-  std::vector<std::vector<double>> send_buffer_, receive_buffer_;
+  NodeExchange forces_;  // contributions to other ranks' nodes out, to this rank's in
+  NodeExchange ghosts_;  // displacements of other ranks' nodes this rank's forces read in, of its own out
   std::vector<Index> owned_, slot_, gather_order_;
-  std::vector<int> gather_counts_, gather_offsets_;            // per rank: 3 x its own nodes
-  std::vector<int> step_gather_counts_, step_gather_offsets_;  // the same with the step's sums
+  std::vector<int> gather_counts_, gather_offsets_;  // per rank: 3 x its own nodes
+  std::vector<int> subset_counts_, subset_offsets_;  // per rank: 3 x its own nodes among the drivers' reads
   std::vector<double> owned_sum_, gathered_;  // this rank's own nodes' values (3 each), and every rank's
   std::vector<double> rank_products_;         // this rank's part of a constraint block's products
   std::vector<double> every_rank_;            // from_every_rank's answer
@@ -520,6 +625,8 @@ class MpiBackend final : public CpuEngine {
   };
   json partition_;
   bool whole_on_every_rank_ = false;
+  bool whole_ = true, previous_whole_ = true;  // u_ (u_previous_) right at every node, not only own and ghost ones
+  std::int64_t whole_gathers_ = 0, driver_nodes_gathered_ = 0;
   double exchange_s_ = 0.0;
 };
 

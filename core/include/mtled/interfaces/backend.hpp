@@ -40,6 +40,10 @@ class StepEngine {
   // u_n and u_(n-1) on the host (a device copies them back; valid until the next call that changes the state).
   virtual std::span<const double> displacement() = 0;
   virtual std::span<const double> previous_displacement() = 0;
+  // u_n right at `nodes` at least (the drivers' reads), and at the nodes this process's forces read. An engine that
+  // spreads the nodes over processes brings just those; every process calls it with the same nodes. The default:
+  // displacement().
+  virtual std::span<const double> displacement_at(std::span<const Index> nodes);
 
   // f_n = f_int(u_n), kept for predict(); with `sums`, IncrementSums too. Returns -1, or the lowest-numbered
   // integration point whose F is inadmissible.
@@ -54,8 +58,11 @@ class StepEngine {
   // u~ += M^-1 Phi^T y.
   virtual void constrained_values(const ConstraintBlock& block, std::vector<double>& out) = 0;
   virtual void add_correction(const ConstraintBlock& block, const std::vector<double>& y) = 0;
-  // u~ becomes u_(n+1) (u_(n-1) <- u_n <- u~); returns the step's sums.
-  virtual StepSums commit() = 0;
+  // u~ becomes u_(n+1) (u_(n-1) <- u_n <- u~); returns the step's sums. `whole_displacement`: a monitor on some
+  // process reads u_(n+1) at every node (an engine that spreads the nodes over processes gathers it then, and
+  // otherwise brings each process only what its forces read; displacement() gathers it on demand, every process
+  // calling it alike).
+  virtual StepSums commit(bool whole_displacement) = 0;
 
   // f = f_int(u) for host vectors, the state untouched (the monitors' extra evaluations, and integrators outside the
   // central-difference family). Returns -1 or the lowest-numbered inadmissible integration point.

@@ -34,6 +34,9 @@ class VolumetricTreatment {
   // lowest-numbered inadmissible point among those evaluated. The default throws std::logic_error.
   virtual Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f,
                                 std::span<const PointRange> ranges);
+  // The integration points whose deformation gradients that evaluation computes: their supports are the nodes of u
+  // it reads (an engine brings those to each process). The default: every point.
+  virtual std::vector<PointRange> points_read(const Model& model, std::span<const PointRange> ranges);
   // E(u); NaN when some F is inadmissible.
   virtual double strain_energy(const Model& model, std::span<const double> u) = 0;
 };

@@ -43,6 +43,7 @@ class HistoryWriter final : public OutputWriter {
   std::string name() const override { return "history"; }
   void before_run(const StepRecord& initial) override;
   void after_step(const StepRecord& step) override;
+  bool reads_displacement(long) const override { return false; }
 
  private:
   void complete(const StepRecord& last) override;
@@ -63,6 +64,7 @@ class SnapshotWriter final : public OutputWriter {
   std::string name() const override { return "snapshots"; }
   void before_run(const StepRecord& initial) override;
   void after_step(const StepRecord& step) override;
+  bool reads_displacement(long step) const override { return step % every_ == 0 && step > 0; }
 
  private:
   void complete(const StepRecord& last) override;

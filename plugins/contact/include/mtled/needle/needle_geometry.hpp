@@ -62,6 +62,8 @@ class TipStrainWatch {
   // Keeps the integration points that a tip anywhere along the path can come within `radius` of.
   void setup(const NeedlePath& path, const ModelView& model, double radius);
   double largest(const ModelView& model, std::span<const double> u, const Vec3& tip) const;
+  // Appends the nodes largest(model, u, tip) reads.
+  void append_nodes_read(const ModelView& model, const Vec3& tip, std::vector<Index>& nodes) const;
 
  private:
   std::vector<Index> watched_;
