@@ -238,6 +238,15 @@ class RigidContactNeedle final : public NeedleModel {
           load.step, 1e3 * depth_, contacts_.size(), slipping_count_, caught_, released_, axial_force());
   }
 
+  // What update() reads: the supports of the candidates not in contact (catch_nodes_inside) and, before a puncture
+  // by strain, of the points around the tip.
+  bool nodes_read(const LoadState&, const ModelView& model, std::vector<Index>& nodes) const override {
+    if (!punctured_ && !puncture_force_) tip_strain_.append_nodes_read(model, path_.tip(depth_), nodes);
+    for (const Index n : candidates_)
+      if (!in_contact_[n]) model.append_node_support(n, nodes);
+    return true;
+  }
+
   std::vector<NodalConstraints*> constraints() override { return {&contact_}; }
 
   NeedleStatus status() const override {

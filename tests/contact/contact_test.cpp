@@ -10,6 +10,7 @@
 #include "mtled/scene.hpp"
 #include "mtled/simulation.hpp"
 #include "test_support.hpp"
+#include "twin_needles.hpp"
 
 namespace mtled {
 namespace {
@@ -266,6 +267,29 @@ TEST(RigidContact, BeforePunctureTheFootprintFollowsTheTip) {
       const Vec3 d(u[3 * n], u[3 * n + 1], u[3 * n + 2]);
       EXPECT_NEAR((d - kIndentation * kDirection).norm(), 0.0, 1e-9 * kIndentation) << "node " << n;
     }
+  }
+}
+
+// What the needle says it reads is all it reads (tests/support/twin_needles.hpp), with friction and without, and
+// with the puncture decided by the strain near the tip.
+TEST(RigidContact, ReadsOnlyTheNodesItDeclares) {
+  const test::OneThread one_thread;
+  for (const double mu : {0.0, 0.3}) {
+    SCOPED_TRACE(mu);
+    const json document = scene_json(needle_block(mu));
+    Simulation simulation(make_scene(document), test::catalog());
+    const auto twin = [&] {
+      auto needle = test::make<NeedleModel>("rigid_contact", document["needle"]);
+      needle->setup(simulation.model().view());
+      return needle;
+    };
+    auto monitor = std::make_shared<test::TwinNeedles>(std::vector{twin(), twin(), twin()});
+    simulation.add_monitor(monitor);
+    simulation.run();
+    EXPECT_TRUE(monitor->punctured);
+    EXPECT_GT(monitor->driven, 0);
+    EXPECT_GT(monitor->largest_read, 0u);
+    EXPECT_LT(monitor->largest_read, static_cast<std::size_t>(simulation.model().node_count()));
   }
 }
 

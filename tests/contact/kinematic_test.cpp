@@ -3,15 +3,14 @@
 // options of docs/needle-models.md ("drive", "lateral") as they show in the converged state.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "mtled/errors.hpp"
 #include "mtled/needle/needle_geometry.hpp"
 #include "mtled/scene.hpp"
 #include "mtled/simulation.hpp"
 #include "test_support.hpp"
+#include "twin_needles.hpp"
 
 namespace mtled {
 namespace {
@@ -171,45 +170,6 @@ TEST(KinematicNeedle, FreeLateralRefusesAnObliqueNeedle) {
 }  // namespace
 // The needle's trajectory from a 3D Slicer markups file: the first two placed control points, in metres, in the
 // file's frame; what is not a usable markups file is refused naming the field.
-// Two copies of the scene's needle beside the running loop, after every step: one updated with the whole u, the
-// other with u where its nodes_read() says it reads and NaN elsewhere. Were a node it reads left out, its capture
-// or its puncture test would differ (a NaN propagates), so each of the four ways to drive must give the same
-// prescribed values and the same entries through indentation, puncture and penetration.
-class TwinNeedles final : public StepMonitor {
- public:
-  TwinNeedles(std::shared_ptr<NeedleModel> whole, std::shared_ptr<NeedleModel> declared)
-      : whole_(std::move(whole)), declared_(std::move(declared)) {}
-  std::string name() const override { return "twin_needles"; }
-  void after_step(const StepRecord& step) override {
-    const LoadState load{step.time, step.load_fraction, step.step};
-    std::vector<Index> nodes;
-    ASSERT_TRUE(declared_->nodes_read(load, *step.model, nodes));
-    std::vector<double> poisoned(step.u.size(), std::numeric_limits<double>::quiet_NaN());
-    for (const Index n : nodes)
-      for (std::size_t c = 0; c < 3; ++c) poisoned[3 * static_cast<std::size_t>(n) + c] = step.u[3 * static_cast<std::size_t>(n) + c];
-    whole_->update(load, *step.model, step.u);
-    declared_->update(load, *step.model, poisoned);
-    std::sort(nodes.begin(), nodes.end());
-    largest_read = std::max(largest_read, static_cast<std::size_t>(std::unique(nodes.begin(), nodes.end()) - nodes.begin()));
-    const auto a = whole_->constraints(), b = declared_->constraints();
-    ASSERT_EQ(a.size(), b.size());
-    for (std::size_t s = 0; s < a.size(); ++s) {
-      ASSERT_EQ(a[s]->nodes(), b[s]->nodes()) << "step " << step.step;
-      ASSERT_EQ(a[s]->points().size(), b[s]->points().size()) << "step " << step.step;
-      for (std::size_t k = 0; k < a[s]->values.size(); ++k)
-        ASSERT_EQ(a[s]->values[k], b[s]->values[k]) << "step " << step.step << ", set " << a[s]->name << ", entry " << k;
-    }
-    punctured = whole_->status().phase == NeedlePhase::penetration;
-    driven = whole_->status().driven_nodes;
-  }
-  std::size_t largest_read = 0;
-  bool punctured = false;
-  Index driven = 0;
-
- private:
-  std::shared_ptr<NeedleModel> whole_, declared_;
-};
-
 TEST(KinematicNeedle, ReadsOnlyTheNodesItDeclares) {
   const test::OneThread one_thread;
   for (const json& options : {json{{"driven", "shaft_surface"}, {"drive", "from_reference"}}, kPaperNodes,
@@ -224,7 +184,7 @@ TEST(KinematicNeedle, ReadsOnlyTheNodesItDeclares) {
       needle->setup(simulation.model().view());
       return needle;
     };
-    auto monitor = std::make_shared<TwinNeedles>(twin(), twin());
+    auto monitor = std::make_shared<test::TwinNeedles>(std::vector{twin(), twin(), twin()});
     simulation.add_monitor(monitor);
     simulation.run();
     EXPECT_TRUE(monitor->punctured);
