@@ -276,20 +276,7 @@ TEST(RigidContact, ReadsOnlyTheNodesItDeclares) {
   const test::OneThread one_thread;
   for (const double mu : {0.0, 0.3}) {
     SCOPED_TRACE(mu);
-    const json document = scene_json(needle_block(mu));
-    Simulation simulation(make_scene(document), test::catalog());
-    const auto twin = [&] {
-      auto needle = test::make<NeedleModel>("rigid_contact", document["needle"]);
-      needle->setup(simulation.model().view());
-      return needle;
-    };
-    auto monitor = std::make_shared<test::TwinNeedles>(std::vector{twin(), twin(), twin()});
-    simulation.add_monitor(monitor);
-    simulation.run();
-    EXPECT_TRUE(monitor->punctured);
-    EXPECT_GT(monitor->driven, 0);
-    EXPECT_GT(monitor->largest_read, 0u);
-    EXPECT_LT(monitor->largest_read, static_cast<std::size_t>(simulation.model().node_count()));
+    test::expect_needle_reads_only_what_it_declares(scene_json(needle_block(mu)));
   }
 }
 

@@ -12,6 +12,8 @@
 
 #include "mtled/interfaces/driver.hpp"
 #include "mtled/monitor.hpp"
+#include "mtled/simulation.hpp"
+#include "test_support.hpp"
 
 namespace mtled::test {
 
@@ -58,5 +60,24 @@ class TwinNeedles final : public StepMonitor {
  private:
   std::vector<std::shared_ptr<NeedleModel>> needles_;
 };
+
+// Runs the scene `document` (validated) with three copies of its needle beside the loop, and checks what they saw:
+// the needle punctured and drove entries, and read some nodes but not all of them.
+inline void expect_needle_reads_only_what_it_declares(const json& document) {
+  const Scene scene = validate_scene(parse_scene(document.dump(), "twin_needles.json"), catalog());
+  Simulation simulation(scene, catalog());
+  const auto twin = [&] {
+    auto needle = make<NeedleModel>(document["needle"]["type"], document["needle"]);
+    needle->setup(simulation.model().view());
+    return needle;
+  };
+  auto monitor = std::make_shared<TwinNeedles>(std::vector{twin(), twin(), twin()});
+  simulation.add_monitor(monitor);
+  simulation.run();
+  EXPECT_TRUE(monitor->punctured);
+  EXPECT_GT(monitor->driven, 0);
+  EXPECT_GT(monitor->largest_read, 0u);
+  EXPECT_LT(monitor->largest_read, static_cast<std::size_t>(simulation.model().node_count()));
+}
 
 }  // namespace mtled::test
