@@ -445,8 +445,7 @@ class MpiBackend final : public CpuEngine {
   void build_ghosts(const Model& model) {
     const GradientRows& rows = model.ip_supports();
     const std::vector<PointRange> own{points_};
-    const std::vector<PointRange> read = whole_on_every_rank_ ? std::vector<PointRange>{{0, model.integration_point_count()}}
-                                                              : model.points_read(own);
+    const std::vector<PointRange> read = model.points_read(own);  // every point for a treatment computed whole
     std::vector<char> marked(static_cast<std::size_t>(model.node_count()), 0);
     for (const PointRange& range : read)
       for (Index p = range.first; p < range.second; ++p)
