@@ -92,15 +92,20 @@ int study(int argc, char** argv) {
   const auto nodes = static_cast<double>(model.node_count());
   // The steps on which a monitor reads the whole displacement: the fold check's (the most frequent; the stable-step
   // estimate's are rarer), or the snapshots' when more frequent.
+  // The constraint products summed over the ranks every step: 8 bytes per constrained row and component.
+  double product_bytes = 0.0;
+  for (const NodalConstraints* set : simulation.constraint_sets())
+    product_bytes += 8.0 * static_cast<double>(set->size()) *
+                     static_cast<double>(std::count(set->components().begin(), set->components().end(), true));
   long whole_every = scene.section("monitors").integer("inversion_every_steps");
   if (const long snapshots = scene.section("output").integer("every_steps"); snapshots > 0)
     whole_every = whole_every > 0 ? std::min(whole_every, snapshots) : snapshots;
   fmt::print("{}: {} nodes, {} integration points; one rank: force kernel {:.3f} ms per evaluation, {:.2f} "
              "evaluations per step, the update {:.3f} ms and the rest {:.3f} ms per step; network assumed {:.1f} us, "
-             "{:.1f} GB/s; the whole displacement gathered every {} steps\n",
+             "{:.1f} GB/s; the whole displacement gathered every {} steps, {:.0f} KB of constraint products summed per step\n",
              positional[0], model.node_count(), model.integration_point_count(), costs.kernel_s * 1e3,
              costs.evaluations_per_step, costs.update_per_step_s * 1e3, costs.repeated_per_step_s * 1e3,
-             latency_s * 1e6, bandwidth / 1e9, whole_every);
+             latency_s * 1e6, bandwidth / 1e9, whole_every, product_bytes / 1e3);
   fmt::print("| parts | imbalance | ghost nodes per part (mean / largest) | boundary points (largest share) | neighbours "
              "(largest) | halo KB per evaluation and per step (largest rank) | whole gather KB (largest rank) | projected "
              "ms per step | speed-up |\n");
@@ -131,13 +136,16 @@ int study(int argc, char** argv) {
     const double reduction = std::ceil(std::log2(n)) * latency_s;
     const double evaluation = kernel * boundary_share + std::max(halo, kernel * (1.0 - boundary_share)) + reduction;
     // Per step: the rank's own nodes' update (the most-owning rank's share), the repeated rest, and the exchanges
-    // of the step: the prediction's, the constraint products' and the step sums' reductions and the drivers' gather
-    // (a few dozen nodes: latency), the ghost nodes' displacements (as the halo, not hidden), and the whole
-    // displacement on one step in whole_every.
+    // of the step: the prediction's and the step sums' reductions and the drivers' gather (a few dozen nodes:
+    // latency), the constraint products' sum (a reduce-scatter, one message to each other rank, and a gather: twice
+    // the products' bytes), the ghost nodes' displacements (as the halo, not hidden), and the whole displacement on
+    // one step in whole_every.
     const double most_owned = static_cast<double>(*std::max_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
     const double update = costs.update_per_step_s * most_owned / nodes;
     const double whole = 2.0 * std::ceil(std::log2(n)) * latency_s + gather_bytes / bandwidth;
-    const double exchanges = 4.0 * reduction + halo + (whole_every > 0 ? whole / static_cast<double>(whole_every) : 0.0);
+    const double products = (n - 1) * latency_s + reduction + 2.0 * product_bytes / bandwidth;
+    const double exchanges = 3.0 * reduction + products + halo +
+                             (whole_every > 0 ? whole / static_cast<double>(whole_every) : 0.0);
     const double step = costs.evaluations_per_step * evaluation + update + costs.repeated_per_step_s + exchanges;
     fmt::print("| {} | {:.3f} | {:.0f} / {:.0f} | {:.0f}% | {} | {:.1f} | {:.0f} | {:.3f} | {:.1f}x |\n", n, imbalance,
                mean_ghosts, most_ghosts, 100.0 * boundary_share, neighbours, halo_bytes / 1e3, gather_bytes / 1e3,

@@ -187,11 +187,8 @@ class MpiBackend final : public CpuEngine {
       for (std::size_t j = 0; j < k; ++j) mine[k * r + j] = sum[j];
     }
     const auto start = Clock::now();
-    const std::vector<double>& all = from_every_rank(mine);
+    sum_in_rank_order(mine, out);
     exchange_s_ += seconds_since(start);
-    out.assign(mine.size(), 0.0);
-    for (int q = 0; q < ranks_; ++q)
-      for (std::size_t i = 0; i < out.size(); ++i) out[i] += all[static_cast<std::size_t>(q) * out.size() + i];
   }
 
   // u~ += M^-1 Phi^T y at the rank's own nodes (each node's sum as on one process).
@@ -371,6 +368,34 @@ class MpiBackend final : public CpuEngine {
     MPI_Allgather(mine.data(), static_cast<int>(mine.size()), MPI_DOUBLE, every_rank_.data(),
                   static_cast<int>(mine.size()), MPI_DOUBLE, MPI_COMM_WORLD);
     return every_rank_;
+  }
+
+  // out = the sum over the ranks of their `mine` (the same length on every rank), each value added in rank order
+  // from zero: the same bits on every rank. A reduce-scatter and a gather: rank q sums slice q of the values (every
+  // rank sends it its part of that slice) and every rank gathers the summed slices, so a rank moves about twice the
+  // values whatever the number of ranks (an all-gather of every rank's values would move N times as many).
+  void sum_in_rank_order(std::span<const double> mine, std::vector<double>& out) {
+    const auto n = static_cast<std::int64_t>(mine.size());
+    slice_offsets_.resize(static_cast<std::size_t>(ranks_) + 1);
+    for (int q = 0; q <= ranks_; ++q) slice_offsets_[static_cast<std::size_t>(q)] = static_cast<int>(n * q / ranks_);
+    const auto r = static_cast<std::size_t>(rank_);
+    const int my_slice = slice_offsets_[r + 1] - slice_offsets_[r];
+    send_counts_.resize(static_cast<std::size_t>(ranks_));
+    receive_counts_.assign(static_cast<std::size_t>(ranks_), my_slice);
+    receive_offsets_.resize(static_cast<std::size_t>(ranks_));
+    for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
+      send_counts_[q] = slice_offsets_[q + 1] - slice_offsets_[q];
+      receive_offsets_[q] = static_cast<int>(q) * my_slice;
+    }
+    every_rank_.resize(static_cast<std::size_t>(ranks_) * static_cast<std::size_t>(my_slice));
+    MPI_Alltoallv(mine.data(), send_counts_.data(), slice_offsets_.data(), MPI_DOUBLE, every_rank_.data(),
+                  receive_counts_.data(), receive_offsets_.data(), MPI_DOUBLE, MPI_COMM_WORLD);
+    out.assign(static_cast<std::size_t>(n), 0.0);
+    double* slice = out.data() + slice_offsets_[r];
+    for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q)
+      for (int i = 0; i < my_slice; ++i) slice[i] += every_rank_[q * static_cast<std::size_t>(my_slice) + static_cast<std::size_t>(i)];
+    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DOUBLE, out.data(), send_counts_.data(), slice_offsets_.data(), MPI_DOUBLE,
+                   MPI_COMM_WORLD);
   }
 
  private:
@@ -611,7 +636,8 @@ class MpiBackend final : public CpuEngine {
   std::vector<int> subset_counts_, subset_offsets_;  // per rank: 3 x its own nodes among the drivers' reads
   std::vector<double> owned_sum_, gathered_;  // this rank's own nodes' values (3 each), and every rank's
   std::vector<double> rank_products_;         // this rank's part of a constraint block's products
-  std::vector<double> every_rank_;            // from_every_rank's answer
+  std::vector<double> every_rank_;            // from_every_rank's answer; sum_in_rank_order's slices
+  std::vector<int> slice_offsets_, send_counts_, receive_counts_, receive_offsets_;  // sum_in_rank_order's layout
   std::vector<OwnEntries> own_entries_;       // per constraint block met
   std::vector<MPI_Request> requests_;
   std::vector<PointRange> boundary_ranges_, interior_ranges_;
