@@ -232,13 +232,10 @@ class MpiBackend final : public CpuEngine {
       combine_step_sums(StepSums{v[0], v[1], v[2], v[3], static_cast<Index>(v[5])}, v[4], sums, fastest_energy);
       whole = whole || v[6] != 0.0;
     }
-    if (whole) {
-      gather_owned(u_);
-      whole_ = true;
-      ++whole_gathers_;
-    } else {
+    if (whole)
+      gather_whole_displacement();
+    else
       exchange_ghosts();
-    }
     exchange_s_ += seconds_since(start);
     return sums;
   }
@@ -252,9 +249,7 @@ class MpiBackend final : public CpuEngine {
   std::span<const double> displacement() override {
     if (!whole_) {
       const auto start = Clock::now();
-      gather_owned(u_);
-      whole_ = true;
-      ++whole_gathers_;
+      gather_whole_displacement();
       exchange_s_ += seconds_since(start);
     }
     return u_;
@@ -319,11 +314,11 @@ class MpiBackend final : public CpuEngine {
       return first_bad;
     }
     auto start = Clock::now();
-    post_receives();
+    post_receives(forces_.my_values, kForceTag);
     exchange_s_ += seconds_since(start);
     note(model().internal_forces(u, boundary_f_, boundary_ranges_));
     start = Clock::now();
-    send_contributions();
+    send_values(forces_.theirs, forces_.their_values, boundary_f_, kForceTag);
     exchange_s_ += seconds_since(start);
     note(model().internal_forces(u, f, interior_ranges_, progress_));
     start = Clock::now();
@@ -506,26 +501,28 @@ class MpiBackend final : public CpuEngine {
     boundary_f_.assign(3 * static_cast<std::size_t>(model.node_count()), 0.0);
   }
 
-  void post_receives() {
+  // The start of an exchange: a receive into each other rank's non-empty buffer in[q].
+  void post_receives(std::vector<std::vector<double>>& in, int tag) {
     requests_.clear();  // kept: no allocation in the time step
     for (int q = 0; q < ranks_; ++q) {
-      auto& in = forces_.my_values[static_cast<std::size_t>(q)];
-      if (in.empty()) continue;
+      auto& buffer = in[static_cast<std::size_t>(q)];
+      if (buffer.empty()) continue;
       requests_.emplace_back();
-      MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, q, kForceTag, MPI_COMM_WORLD, &requests_.back());
+      MPI_Irecv(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, q, tag, MPI_COMM_WORLD, &requests_.back());
     }
   }
 
-  // The boundary points' contributions to the nodes each other rank owns.
-  void send_contributions() {
+  // Sends each other rank q the values of v (3 per node) at the nodes lists[q], packed into out[q].
+  void send_values(const std::vector<std::vector<Index>>& lists, std::vector<std::vector<double>>& out,
+                   std::span<const double> v, int tag) {
     for (int q = 0; q < ranks_; ++q) {
-      const auto& list = forces_.theirs[static_cast<std::size_t>(q)];
-      auto& out = forces_.their_values[static_cast<std::size_t>(q)];
+      const auto& list = lists[static_cast<std::size_t>(q)];
+      auto& buffer = out[static_cast<std::size_t>(q)];
       if (list.empty()) continue;
       for (std::size_t k = 0; k < list.size(); ++k)
-        for (std::size_t c = 0; c < 3; ++c) out[3 * k + c] = boundary_f_[3 * static_cast<std::size_t>(list[k]) + c];
+        for (std::size_t c = 0; c < 3; ++c) buffer[3 * k + c] = v[3 * static_cast<std::size_t>(list[k]) + c];
       requests_.emplace_back();
-      MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, q, kForceTag, MPI_COMM_WORLD, &requests_.back());
+      MPI_Isend(buffer.data(), static_cast<int>(buffer.size()), MPI_DOUBLE, q, tag, MPI_COMM_WORLD, &requests_.back());
     }
   }
 
@@ -566,24 +563,8 @@ class MpiBackend final : public CpuEngine {
 
   // u_ right at the ghost nodes as well: each rank sends its own nodes' values to the ranks whose forces read them.
   void exchange_ghosts() {
-    requests_.clear();
-    for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
-      auto& in = ghosts_.their_values[q];
-      if (in.empty()) continue;
-      requests_.emplace_back();
-      MPI_Irecv(in.data(), static_cast<int>(in.size()), MPI_DOUBLE, static_cast<int>(q), kGhostTag, MPI_COMM_WORLD,
-                &requests_.back());
-    }
-    for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
-      const auto& list = ghosts_.mine[q];
-      auto& out = ghosts_.my_values[q];
-      if (list.empty()) continue;
-      for (std::size_t k = 0; k < list.size(); ++k)
-        for (std::size_t c = 0; c < 3; ++c) out[3 * k + c] = u_[3 * static_cast<std::size_t>(list[k]) + c];
-      requests_.emplace_back();
-      MPI_Isend(out.data(), static_cast<int>(out.size()), MPI_DOUBLE, static_cast<int>(q), kGhostTag, MPI_COMM_WORLD,
-                &requests_.back());
-    }
+    post_receives(ghosts_.their_values, kGhostTag);
+    send_values(ghosts_.mine, ghosts_.my_values, u_, kGhostTag);
     MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
     for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
       const auto& list = ghosts_.theirs[q];
@@ -591,6 +572,13 @@ class MpiBackend final : public CpuEngine {
       for (std::size_t k = 0; k < list.size(); ++k)
         for (std::size_t c = 0; c < 3; ++c) u_[3 * static_cast<std::size_t>(list[k]) + c] = in[3 * k + c];
     }
+  }
+
+  // u_ right at every node (the monitors' steps, the drivers that do not say what they read, the run's end).
+  void gather_whole_displacement() {
+    gather_owned(u_);
+    whole_ = true;
+    ++whole_gathers_;
   }
 
   static double seconds_since(Clock::time_point start) {
