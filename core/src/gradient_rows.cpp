@@ -12,13 +12,29 @@ void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index
     entries_ += sizes_[r];
     block_offsets_[r + 1] = block_offsets_[r] + (sizes_[r] + kBlock - 1) / kBlock;
   }
+  // Slots in order of first use; nodes no row names (an error the model reports) take the last ones.
+  constexpr Index kUnset = -1;
+  slot_of_node_.assign(static_cast<std::size_t>(padding_node) + 1, kUnset);
+  node_of_slot_.clear();
+  node_of_slot_.reserve(slot_of_node_.size());
+  auto give_slot = [&](Index node) {
+    Index& slot = slot_of_node_[static_cast<std::size_t>(node)];
+    if (slot != kUnset) return;
+    slot = static_cast<Index>(node_of_slot_.size());
+    node_of_slot_.push_back(node);
+  };
+  for (const auto& support : supports)
+    for (Index node : support) give_slot(node);
+  for (Index node = 0; node < padding_node; ++node) give_slot(node);
+  slot_of_node_[static_cast<std::size_t>(padding_node)] = padding_node;
+  node_of_slot_.push_back(padding_node);
   records_.assign(static_cast<std::size_t>(kBlock * blocks()), 4 * padding_node);
   const auto values = static_cast<std::size_t>(3 * kBlock * blocks());
   double_gradients_.assign(precision == RowPrecision::double_precision ? values : 0, 0.0);
   single_gradients_.assign(precision == RowPrecision::single_precision ? values : 0, 0.0f);
   for (std::size_t r = 0; r < supports.size(); ++r)
     for (std::size_t k = 0; k < supports[r].size(); ++k)
-      records_[position(static_cast<Index>(r), static_cast<int>(k))] = 4 * supports[r][k];
+      records_[position(static_cast<Index>(r), static_cast<int>(k))] = 4 * slot(supports[r][k]);
 }
 
 void GradientRows::set_gradient(Index row, int k, const Vec3& gradient) {

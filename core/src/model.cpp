@@ -38,6 +38,40 @@ Mat3 deformation_gradient_at(const GradientRows& rows, Index ip, const double* u
   return F;
 }
 
+// Morton (Z-order) keys of the tets' centroids, 21 bits per axis of the mesh's bounding box: sorting by them puts
+// cells that are close in space close in the order.
+std::vector<std::uint64_t> morton_keys(const TetMesh& mesh) {
+  constexpr std::uint64_t kCells = (std::uint64_t{1} << 21) - 1;
+  // Spreads the low 21 bits of x to every third bit.
+  auto spread = [](std::uint64_t x) {
+    x &= kCells;
+    x = (x | x << 32) & 0x1f00000000ffffULL;
+    x = (x | x << 16) & 0x1f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+  };
+  Vec3 lo = mesh.points.front(), hi = lo;
+  for (const auto& p : mesh.points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  const double extent = std::max((hi - lo).maxCoeff(), std::numeric_limits<double>::min());
+  std::vector<std::uint64_t> key(mesh.tets.size());
+  for (std::size_t t = 0; t < key.size(); ++t) {
+    Vec3 centroid = Vec3::Zero();
+    for (const Index v : mesh.tets[t]) centroid += mesh.points[static_cast<std::size_t>(v)];
+    std::uint64_t code = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double cell = (0.25 * centroid[c] - lo[c]) / extent * static_cast<double>(kCells);
+      code |= spread(static_cast<std::uint64_t>(std::clamp(cell, 0.0, static_cast<double>(kCells)))) << c;
+    }
+    key[t] = code;
+  }
+  return key;
+}
+
 }  // namespace
 
 Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
@@ -94,8 +128,18 @@ void Model::build_integration_points(int points_per_tet, const std::vector<int>&
   std::iota(order.begin(), order.end(), Index{0});
   const int groups = cell_groups.empty() ? 1 : *std::max_element(cell_groups.begin(), cell_groups.end()) + 1;
   group_offsets_.assign(static_cast<std::size_t>(groups) + 1, 0);
+  // Integration points follow their cells along a Morton curve (within a cell group and a region, so a group stays
+  // one range of points and a region's points form long one-material batches): consecutive points then share most
+  // of their support nodes, and the force kernel finds their records in cache. The mesh generator's order scatters
+  // them (the brain phantom's force kernel took 1.47x as long in it, the default scene's 1.22x).
+  const std::vector<std::uint64_t> key = morton_keys(mesh_);
+  std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
+    const int group_a = cell_groups.empty() ? 0 : cell_groups[a], group_b = cell_groups.empty() ? 0 : cell_groups[b];
+    if (group_a != group_b) return group_a < group_b;
+    if (mesh_.tet_region[a] != mesh_.tet_region[b]) return mesh_.tet_region[a] < mesh_.tet_region[b];
+    return key[a] < key[b];
+  });
   if (!cell_groups.empty()) {
-    std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) { return cell_groups[a] < cell_groups[b]; });
     for (const int g : cell_groups) group_offsets_[static_cast<std::size_t>(g) + 1] += points_per_tet;
   } else {
     group_offsets_[1] = static_cast<Index>(count);
@@ -277,7 +321,7 @@ void Model::build_integration_correction() {
     for (int k = 0; k < ip_rows_.size(ip); ++k) residual[ip_rows_.node(ip, k)] -= ip_weight_[ip] * ip_rows_.gradient(ip, k);
   const std::vector<Vec3> xi = solve_integration_correction(residual);
   for (Index i = 0; i < node_count(); ++i)
-    for (int d = 0; d < 3; ++d) xi_[4 * static_cast<std::size_t>(i) + d] = xi[i][d];
+    for (int d = 0; d < 3; ++d) xi_[4 * static_cast<std::size_t>(ip_rows_.slot(i)) + d] = xi[i][d];
   for (Index ip = 0; ip < integration_point_count(); ++ip) {
     Vec3 mean = Vec3::Zero();
     for (int k = 0; k < ip_rows_.size(ip); ++k) mean += xi[ip_rows_.node(ip, k)];
@@ -459,22 +503,26 @@ Mat3 Model::deformation_gradient(Index ip, std::span<const double> u) const {
   return deformation_gradient_at(ip_rows_, ip, u.data());
 }
 
-// A team task: thread `thread`'s share of the nodes.
+// A team task: thread `thread`'s share of the kernel's slots (GradientRows::slot), each filled from its node.
 void Model::pad_displacement(std::span<const double> u, int thread) const {
   const auto [begin, end] = ThreadTeam::share(node_count(), thread, team_->size());
-  for (std::int64_t i = begin; i < end; ++i)
-    for (std::size_t c = 0; c < 3; ++c) padded_u_[4 * static_cast<std::size_t>(i) + c] = u[3 * static_cast<std::size_t>(i) + c];
+  for (std::int64_t s = begin; s < end; ++s) {
+    const auto i = static_cast<std::size_t>(ip_rows_.node_at_slot(static_cast<Index>(s)));
+    for (std::size_t c = 0; c < 3; ++c) padded_u_[4 * static_cast<std::size_t>(s) + c] = u[3 * i + c];
+  }
 }
 
 // A team task: sums the per-thread buffers in a fixed order over thread `thread`'s share of the nodes.
 void Model::reduce_thread_forces(std::span<double> f, int thread) const {
   const auto [begin, end] = ThreadTeam::share(node_count(), thread, team_->size());
-  for (std::int64_t i = begin; i < end; ++i)
+  for (std::int64_t i = begin; i < end; ++i) {
+    const auto s = static_cast<std::size_t>(ip_rows_.slot(static_cast<Index>(i)));
     for (std::size_t c = 0; c < 3; ++c) {
       double sum = 0.0;
-      for (const auto& buffer : thread_forces_) sum += buffer[4 * static_cast<std::size_t>(i) + c];
+      for (const auto& buffer : thread_forces_) sum += buffer[4 * s + c];
       f[3 * static_cast<std::size_t>(i) + c] = sum;
     }
+  }
 }
 
 // The forces of integration points begin .. end - 1 into f4, in batches of consecutive points with one

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <iostream>
+#include <numeric>
 #include <random>
 #include <thread>
 
@@ -69,6 +71,73 @@ TEST(SupportRows, TransposeListsEachColumnsRowsInRowOrder) {
   EXPECT_EQ(t.nodes, (std::vector<Index>{0, 1, 0, 3, 1}));
   EXPECT_EQ(t.rows(), 5);
   EXPECT_EQ(t.size(1), 0);
+}
+
+TEST(GradientRows, SlotsFollowTheRowsFirstUseAndEntriesStillNameTheirNodes) {
+  // 9 nodes (8 is the padding node); rows name 5, 2, then 2, 7, 1, then nothing, then 7; 0, 3, 4 and 6 are unused.
+  const std::vector<std::vector<Index>> supports = {{5, 2}, {2, 7, 1}, {}, {7}};
+  GradientRows rows;
+  rows.assign(supports, 8, RowPrecision::double_precision);
+  const std::vector<Index> expected_slot = {4, 3, 1, 5, 6, 0, 7, 2, 8};
+  for (Index node = 0; node <= 8; ++node) {
+    EXPECT_EQ(rows.slot(node), expected_slot[static_cast<std::size_t>(node)]) << "node " << node;
+    EXPECT_EQ(rows.node_at_slot(rows.slot(node)), node);
+  }
+  for (Index r = 0; r < rows.rows(); ++r)
+    for (int k = 0; k < rows.size(r); ++k) {
+      EXPECT_EQ(rows.node(r, k), supports[static_cast<std::size_t>(r)][static_cast<std::size_t>(k)]);
+      EXPECT_EQ(rows.block_records(rows.block_begin(r))[k], 4 * rows.slot(rows.node(r, k)));
+    }
+  // The padding entries of a row's last block point at the padding node's own slot.
+  EXPECT_EQ(rows.block_records(rows.block_begin(1))[3], 4 * 8);
+}
+
+TEST(Model, IntegrationPointsFollowTheirCellsThroughSpace) {
+  // A mesh whose cells come in random order: the model must still visit them so that consecutive points are
+  // neighbours (the force kernel's cache depends on it), every cell's points together.
+  const int n = 12;
+  TetMesh mesh = test::box_mesh(Vec3(0.012, 0.012, 0.012), n, n, n, 0.2, 3);
+  std::mt19937 random(5);
+  std::shuffle(mesh.tets.begin(), mesh.tets.end(), random);
+  const double cell = 0.012 / n;
+  auto centroid = [&](Index t) {
+    Vec3 c = Vec3::Zero();
+    for (Index v : mesh.tets[static_cast<std::size_t>(t)]) c += mesh.points[static_cast<std::size_t>(v)];
+    return Vec3(c / 4.0);
+  };
+  auto mean_jump = [&](const std::vector<Index>& order) {
+    double sum = 0.0;
+    for (std::size_t i = 1; i < order.size(); ++i) sum += (centroid(order[i]) - centroid(order[i - 1])).norm();
+    return sum / static_cast<double>(order.size() - 1);
+  };
+  std::vector<Index> generator_order(mesh.tets.size());
+  std::iota(generator_order.begin(), generator_order.end(), Index{0});
+  const double shuffled = mean_jump(generator_order);
+  const auto sf = test::make<ShapeFunctions>("mls", json::object());
+  const auto m = test::make<Material>("neo_hookean", {{"mu", kMu}, {"D", kD}, {"density", 1000.0}});
+  const Model::Options four_points_per_cell = [] {
+    Model::Options o;
+    o.integration_points_per_tet = 4;
+    return o;
+  }();
+  const Model model(mesh, sf, {m}, four_points_per_cell);
+  const auto& ip_tet = model.ip_tets();
+  ASSERT_EQ(ip_tet.size(), 4 * mesh.tets.size());
+  std::vector<Index> visited;
+  for (std::size_t p = 0; p < ip_tet.size(); p += 4) {
+    for (std::size_t k = 1; k < 4; ++k) EXPECT_EQ(ip_tet[p + k], ip_tet[p]) << "a cell's points lie apart";
+    visited.push_back(ip_tet[p]);
+  }
+  std::vector<Index> sorted = visited;
+  std::sort(sorted.begin(), sorted.end());
+  EXPECT_EQ(sorted, generator_order) << "every cell once";
+  // Random order: a jump of about half the box (0.66 of its side on average). A space-filling order moves about one
+  // cell at a time, with rare longer jumps between the curve's blocks.
+  const double ordered = mean_jump(visited);
+  std::cout << "mean distance between consecutive cells: " << ordered / cell << " cell sides (generator's order "
+            << shuffled / cell << ")\n";
+  EXPECT_GT(shuffled, 4.0 * cell);
+  EXPECT_LT(ordered, 2.0 * cell);
 }
 
 TEST(Model, LumpedMassIsTheBodyMass) {

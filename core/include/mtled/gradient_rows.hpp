@@ -14,11 +14,18 @@ enum class RowPrecision { double_precision, single_precision };
 
 // Shape-function gradients at the integration points, laid out for the force kernel's gather of F: row r holds
 // blocks block_begin(r) .. block_end(r) - 1 of kBlock entries each; a block holds its entries' record offsets (4 x
-// the node index: the kernel's per-node displacement array has 4 doubles per node), then the x, the y and the z
+// the node's slot, below: the kernel's per-node arrays have 4 doubles per slot), then the x, the y and the z
 // gradient components of its entries, each contiguous (structure of arrays), so one SIMD load reads one component
 // of several entries. A row's last block is padded with zero gradients on the padding node (the node count: one
-// past the last node), which the kernel's per-node array carries as a zero-displacement sink. Gradients are stored
-// in the precision asked for; gradient() returns the stored value, so setup code sees what the kernel uses.
+// past the last node, and its own slot), which the kernel's per-node array carries as a zero-displacement sink.
+// Gradients are stored in the precision asked for; gradient() returns the stored value, so setup code sees what the
+// kernel uses.
+//
+// The kernel's per-node arrays are numbered by slot, not by node: slots follow the order in which the rows first
+// name each node, so the nodes that consecutive integration points read lie next to each other in memory (a window of
+// points reads a few contiguous kilobytes of records, not 40 scattered lines of a cloud-sized array). Every sum keeps
+// its order, so the forces are bitwise those of numbering by node; only the arrays' layout changes. The padding node
+// keeps its own number as its slot.
 class GradientRows {
  public:
   static constexpr int kBlock = 4;
@@ -31,7 +38,10 @@ class GradientRows {
   Index rows() const { return static_cast<Index>(sizes_.size()); }
   int size(Index row) const { return sizes_[row]; }  // entries, padding excluded
   std::int64_t entries() const { return entries_; }   // all rows, padding excluded
-  Index node(Index row, int k) const { return records_[position(row, k)] / 4; }
+  Index node(Index row, int k) const { return node_of_slot_[static_cast<std::size_t>(records_[position(row, k)] / 4)]; }
+  // Where node `node`'s record sits in the kernel's per-node arrays (4 doubles per slot), and the node at a slot.
+  Index slot(Index node) const { return slot_of_node_[static_cast<std::size_t>(node)]; }
+  Index node_at_slot(Index slot) const { return node_of_slot_[static_cast<std::size_t>(slot)]; }
   Vec3 gradient(Index row, int k) const;
 
   std::int64_t block_begin(Index row) const { return block_offsets_[row]; }
@@ -49,6 +59,7 @@ class GradientRows {
   std::vector<std::int64_t> block_offsets_;
   std::vector<int> sizes_;
   std::int64_t entries_ = 0;
+  std::vector<Index> slot_of_node_, node_of_slot_;  // both padding_node + 1 long
   AlignedVector<Index> records_;
   AlignedVector<double> double_gradients_;  // the one the precision names is filled
   AlignedVector<float> single_gradients_;

@@ -94,7 +94,7 @@ class Model {
   // The correction of node I's test-function gradient at integration point ip, xi_I - mean over ip's support of
   // xi_J (zero when consistent integration is off).
   Vec3 gradient_correction(Index ip, Index node) const {
-    const double* xi = xi_.data() + 4 * static_cast<std::size_t>(node);
+    const double* xi = xi_.data() + 4 * static_cast<std::size_t>(ip_rows_.slot(node));
     const double* mean = xi_mean_.data() + 3 * static_cast<std::size_t>(ip);
     return {xi[0] - mean[0], xi[1] - mean[1], xi[2] - mean[2]};
   }
@@ -185,8 +185,8 @@ class Model {
   SupportRows node_rows_;
   SupportStatistics ip_stats_;
   std::vector<double> ip_dt_;
-  // The force kernel's per-node arrays, 4 doubles per node (x, y, z, 0) and one padding node of zeros: the
-  // gradient correction, the displacement being evaluated, and one force accumulator per thread.
+  // The force kernel's per-node arrays, 4 doubles per slot (x, y, z, 0; GradientRows::slot) and one padding slot of
+  // zeros: the gradient correction, the displacement being evaluated, and one force accumulator per thread.
   AlignedVector<double> xi_;
   std::vector<double> xi_mean_;  // per integration point: the mean of xi_I over its support (3 doubles)
   mutable AlignedVector<double> padded_u_;
