@@ -4,7 +4,9 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 #include <numeric>
 #include <random>
 #include <thread>
@@ -71,6 +73,38 @@ TEST(SupportRows, TransposeListsEachColumnsRowsInRowOrder) {
   EXPECT_EQ(t.nodes, (std::vector<Index>{0, 1, 0, 3, 1}));
   EXPECT_EQ(t.rows(), 5);
   EXPECT_EQ(t.size(1), 0);
+}
+
+// The VmFlags of the mapping that holds address p (/proc/self/smaps), empty where there is none.
+std::string mapping_flags(const void* p) {
+  std::ifstream smaps("/proc/self/smaps");
+  const auto address = reinterpret_cast<std::uintptr_t>(p);
+  bool inside = false;
+  for (std::string line; std::getline(smaps, line);) {
+    std::uintptr_t begin = 0, end = 0;
+    char dash = 0;
+    std::istringstream header(line);
+    if (header >> std::hex >> begin >> dash >> end && dash == '-' && line.find(':') > line.find(' ')) {
+      inside = begin <= address && address < end;
+    } else if (inside && line.rfind("VmFlags:", 0) == 0) {
+      return line;
+    }
+  }
+  return {};
+}
+
+TEST(KernelArrays, LargeOnesSitOnWholeHugePagesAskedForAsSuch) {
+  AlignedVector<double> small(1000, 1.0);
+  AlignedVector<double> large((std::size_t{3} << 20) / sizeof(double), 2.0);  // 3 MiB
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(small.data()) % 64, 0u);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(large.data()) % (std::size_t{2} << 20), 0u);
+  EXPECT_EQ(std::accumulate(large.begin(), large.end(), 0.0), 2.0 * static_cast<double>(large.size()));
+  // Where the kernel offers transparent huge pages, the mapping carries the advice ("hg" in its VmFlags).
+  if (std::ifstream("/sys/kernel/mm/transparent_hugepage/enabled")) {
+    const std::string flags = mapping_flags(large.data());
+    ASSERT_FALSE(flags.empty()) << "no mapping found for the array";
+    EXPECT_NE(flags.find(" hg"), std::string::npos) << flags;
+  }
 }
 
 TEST(GradientRows, SlotsFollowTheRowsFirstUseAndEntriesStillNameTheirNodes) {

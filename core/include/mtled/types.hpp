@@ -17,17 +17,20 @@ using Index = std::int32_t;
 // Integration points first .. second - 1.
 using PointRange = std::pair<Index, Index>;
 
-// Allocates on 64-byte boundaries (a cache line, and the widest SIMD register), for the arrays the force
-// kernel reads with aligned vector loads.
+// The force kernel's arrays: at least 64-byte aligned (a cache line, and the widest SIMD register, for aligned vector
+// loads); from 2 MiB up, on 2 MiB boundaries in whole 2 MiB pages with transparent huge pages asked for (Linux
+// madvise), so that streaming them walks the page tables 512 times less often. Defined in core/src/memory.cpp.
+void* allocate_kernel_array(std::size_t bytes);
+void free_kernel_array(void* p, std::size_t bytes) noexcept;
+
 template <class T>
 struct CacheLineAllocator {
   using value_type = T;
-  static constexpr std::align_val_t kAlignment{64};
   CacheLineAllocator() = default;
   template <class U>
   CacheLineAllocator(const CacheLineAllocator<U>&) noexcept {}
-  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), kAlignment)); }
-  void deallocate(T* p, std::size_t) noexcept { ::operator delete(p, kAlignment); }
+  T* allocate(std::size_t n) { return static_cast<T*>(allocate_kernel_array(n * sizeof(T))); }
+  void deallocate(T* p, std::size_t n) noexcept { free_kernel_array(p, n * sizeof(T)); }
   template <class U>
   bool operator==(const CacheLineAllocator<U>&) const noexcept {
     return true;
