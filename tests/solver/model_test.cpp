@@ -6,9 +6,9 @@
 #include <algorithm>
 #include <fstream>
 #include <iostream>
-#include <sstream>
 #include <numeric>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "mtled/constraints.hpp"
