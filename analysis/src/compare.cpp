@@ -9,6 +9,7 @@
 #include "mtled/errors.hpp"
 #include "mtled/analysis/result_file.hpp"
 #include "mtled/analysis/svg.hpp"
+#include "mtled/mesh.hpp"
 #include "mtled/point_search.hpp"
 
 namespace fs = std::filesystem;
@@ -76,11 +77,7 @@ Comparison compare_runs(const fs::path& a, const fs::path& b, PluginCatalog& cat
   c.nodes = static_cast<Index>(field_b.points.size());
   c.nodes_a = static_cast<Index>(field_a.points.size());
 
-  Vec3 lo = field_b.points.front(), hi = lo;
-  for (const auto& x : field_b.points) {
-    lo = lo.cwiseMin(x);
-    hi = hi.cwiseMax(x);
-  }
+  const auto [lo, hi] = bounding_box(field_b.points);
   bool same_cloud = field_a.points.size() == field_b.points.size();
   for (std::size_t i = 0; same_cloud && i < field_a.points.size(); ++i)
     same_cloud = (field_a.points[i] - field_b.points[i]).norm() <= 1e-9 * (hi - lo).norm();

@@ -43,6 +43,7 @@ DiscreteSystem::~DiscreteSystem() = default;
 StepEngine::~StepEngine() = default;
 std::vector<int> StepEngine::cell_groups(const TetMesh&) { return {}; }
 std::span<const double> StepEngine::displacement_at(std::span<const Index>) { return displacement(); }
+bool StepEngine::spreads_nodes() const { return false; }
 
 IncrementSums DiscreteSystem::evaluate_forces(bool increment_sums) {
   const auto u = displacement();

@@ -15,6 +15,20 @@ double tet_volume(const TetMesh& mesh, Index t) {
   return (mesh.points[tet[1]] - a).dot((mesh.points[tet[2]] - a).cross(mesh.points[tet[3]] - a)) / 6.0;
 }
 
+Vec3 tet_centroid(const TetMesh& mesh, Index t) {
+  const auto& tet = mesh.tets[static_cast<std::size_t>(t)];
+  return 0.25 * (mesh.points[tet[0]] + mesh.points[tet[1]] + mesh.points[tet[2]] + mesh.points[tet[3]]);
+}
+
+std::pair<Vec3, Vec3> bounding_box(const std::vector<Vec3>& points) {
+  Vec3 lo = points.front(), hi = lo;
+  for (const auto& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  return {lo, hi};
+}
+
 double tet_radius_ratio(const TetMesh& mesh, Index t) {
   const auto& tet = mesh.tets[t];
   const Vec3& p0 = mesh.points[tet[0]];
@@ -89,8 +103,7 @@ namespace {
 // "tet 7 (number 8 in the mesh's order, centroid at (x, y, z) m)": internal node numbers mean nothing to the
 // person who wrote the mesh file, the position does.
 std::string describe_tet(const TetMesh& mesh, Index t) {
-  const auto& tet = mesh.tets[static_cast<std::size_t>(t)];
-  const Vec3 centroid = 0.25 * (mesh.points[tet[0]] + mesh.points[tet[1]] + mesh.points[tet[2]] + mesh.points[tet[3]]);
+  const Vec3 centroid = tet_centroid(mesh, t);
   return fmt::format("tet {} (number {} in the mesh's order of tets, centroid at ({:.6g}, {:.6g}, {:.6g}) m)", t,
                      t + 1, centroid[0], centroid[1], centroid[2]);
 }
@@ -289,11 +302,7 @@ std::vector<Index> select_nodes(const NodeSelector& selector, const TetMesh& mes
     for (Index n : it->second)
       if (!selector.surface_only || surface[n]) nodes.push_back(n);
   } else {
-    Vec3 lo = mesh.points.front(), hi = lo;
-    for (const auto& p : mesh.points) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
+    const auto [lo, hi] = bounding_box(mesh.points);
     const double tol = selector.tolerance.value_or(1e-6 * (hi - lo).norm());
     for (Index i = 0; i < mesh.node_count(); ++i) {
       if (selector.surface_only && !surface[i]) continue;

@@ -52,19 +52,14 @@ std::vector<std::uint64_t> morton_keys(const TetMesh& mesh) {
     x = (x | x << 2) & 0x1249249249249249ULL;
     return x;
   };
-  Vec3 lo = mesh.points.front(), hi = lo;
-  for (const auto& p : mesh.points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+  const auto [lo, hi] = bounding_box(mesh.points);
   const double extent = std::max((hi - lo).maxCoeff(), std::numeric_limits<double>::min());
   std::vector<std::uint64_t> key(mesh.tets.size());
   for (std::size_t t = 0; t < key.size(); ++t) {
-    Vec3 centroid = Vec3::Zero();
-    for (const Index v : mesh.tets[t]) centroid += mesh.points[static_cast<std::size_t>(v)];
+    const Vec3 centroid = tet_centroid(mesh, static_cast<Index>(t));
     std::uint64_t code = 0;
     for (int c = 0; c < 3; ++c) {
-      const double cell = (0.25 * centroid[c] - lo[c]) / extent * static_cast<double>(kCells);
+      const double cell = (centroid[c] - lo[c]) / extent * static_cast<double>(kCells);
       code |= spread(static_cast<std::uint64_t>(std::clamp(cell, 0.0, static_cast<double>(kCells)))) << c;
     }
     key[t] = code;
@@ -87,11 +82,7 @@ Model::Model(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions
   radius_.resize(spacing_.size());
   for (std::size_t i = 0; i < spacing_.size(); ++i) radius_[i] = dilatation * spacing_[i];
   max_radius_ = *std::max_element(radius_.begin(), radius_.end());
-  Vec3 lo = mesh_.points.front(), hi = lo;
-  for (const auto& p : mesh_.points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+  const auto [lo, hi] = bounding_box(mesh_.points);
   length_scale_ = (hi - lo).norm();
   node_search_ = std::make_unique<PointSearch>(mesh_.points);
 
@@ -391,11 +382,7 @@ class CoarseCorrection {
   // Each node's cell of a regular grid over the nodes' bounding box with about `cells` occupied cells, numbered
   // densely in order of first appearance.
   static std::vector<Index> bin_on_grid(const std::vector<Vec3>& nodes, Index cells) {
-    Vec3 lo = nodes.front(), hi = lo;
-    for (const Vec3& x : nodes) {
-      lo = lo.cwiseMin(x);
-      hi = hi.cwiseMax(x);
-    }
+    const auto [lo, hi] = bounding_box(nodes);
     const Vec3 extent = (hi - lo).cwiseMax(Vec3::Constant(1e-300));
     const double side = std::cbrt(extent.prod() / static_cast<double>(cells));
     const Eigen::Array3i divisions = (extent / side).array().ceil().cast<int>().max(1);

@@ -218,6 +218,7 @@ void Simulation::external_forces(std::span<double> f) {
 }
 
 std::span<const double> Simulation::drivers_reads() {
+  if (!engine_->spreads_nodes()) return displacement();
   nodes_read_.clear();
   for (const Driver* driver : drivers_)
     if (!driver->nodes_read(load_, model_->view(), nodes_read_)) return displacement();

@@ -1,8 +1,9 @@
 #pragma once
 // Copies of a scene's needle beside the running loop, after every step: one updated with the whole u, two with u
 // right only where their nodes_read() says they read: NaN elsewhere in one (a NaN propagates, unless a comparison
-// drops it), u shifted by up to 6 micrometres elsewhere in the other (by node and component) (any read changes some prescribed value's bits). Were
-// a node they read left out, they would prescribe other values or take other entries than the first.
+// drops it), u shifted by up to 6 micrometres elsewhere in the other (by node and component; any read changes some
+// prescribed value's bits). Were a node they read left out, they would prescribe other values or take other entries
+// than the first.
 #include <gtest/gtest.h>
 
 #include <algorithm>

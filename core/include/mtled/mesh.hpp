@@ -31,6 +31,10 @@ struct TetMesh {
 
 // Signed volume of tet `t` (positive when its vertices are ordered right-handed).
 double tet_volume(const TetMesh& mesh, Index t);
+// The mean of tet `t`'s vertices.
+Vec3 tet_centroid(const TetMesh& mesh, Index t);
+// The smallest axis-aligned box holding the points (which must not be empty): lower and upper corners.
+std::pair<Vec3, Vec3> bounding_box(const std::vector<Vec3>& points);
 
 // Drops vertices no tet uses (Gmsh files carry geometry points and surface-only nodes), renumbers, keeps
 // node sets restricted to the surviving nodes.

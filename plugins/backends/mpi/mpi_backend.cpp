@@ -262,6 +262,8 @@ class MpiBackend final : public CpuEngine {
     return u_previous_;
   }
 
+  bool spreads_nodes() const override { return true; }
+
   // u_n at `nodes` (the same list on every rank): each rank's own among them, gathered in list order.
   std::span<const double> displacement_at(std::span<const Index> nodes) override {
     if (whole_ || nodes.empty()) return u_;

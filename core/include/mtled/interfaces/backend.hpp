@@ -44,6 +44,9 @@ class StepEngine {
   // spreads the nodes over processes brings just those; every process calls it with the same nodes. The default:
   // displacement().
   virtual std::span<const double> displacement_at(std::span<const Index> nodes);
+  // Whether displacement_at brings only the nodes asked for (the nodes are spread over processes); where it does not
+  // (the default), the Simulation does not ask the drivers which nodes they read.
+  virtual bool spreads_nodes() const;
 
   // f_n = f_int(u_n), kept for predict(); with `sums`, IncrementSums too. Returns -1, or the lowest-numbered
   // integration point whose F is inadmissible.
