@@ -370,10 +370,10 @@ void Simulation::share_state() {
 }
 
 // The integrators read stable_time_step() before every step and re-plan theirs when it changed.
-void Simulation::lower_stable_time_step(double stable_time_step) {
-  if (!(stable_time_step > 0.0) || !(stable_time_step < stable_time_step_)) return;
-  log().info("step {}: stable time step lowered from {:.4g} s to {:.4g} s (the deformed body is stiffer)", load_.step,
-             stable_time_step_, stable_time_step);
+void Simulation::set_stable_time_step(double stable_time_step) {
+  if (!(stable_time_step > 0.0) || stable_time_step == stable_time_step_) return;
+  log().info("step {}: stable time step {} from {:.4g} s to {:.4g} s", load_.step,
+             stable_time_step < stable_time_step_ ? "lowered" : "raised", stable_time_step_, stable_time_step);
   stable_time_step_ = stable_time_step;
 }
 

@@ -21,12 +21,13 @@ class ModelView;
 class TimeIntegrator;
 
 // What a monitor may change in the run it watches: the stable time step the integrator sizes its next steps by
-// (DiscreteSystem::stable_time_step). Only ever lowered: the stable-step monitor lowers it when the deformed body
-// has become stiffer than the setup estimate allowed for.
+// (DiscreteSystem::stable_time_step). The stable-step monitor lowers it when the deformed body has become stiffer
+// than the setup estimate allowed for, and under "follow" raises it while a steady-state integrator holds its loads
+// (docs/stability.md).
 class StepControl {
  public:
   virtual ~StepControl();
-  virtual void lower_stable_time_step(double stable_time_step) = 0;
+  virtual void set_stable_time_step(double stable_time_step) = 0;
 };
 
 // A completed step n -> n + 1, as a monitor or writer sees it: the states, the masses, the constraints' sets and the

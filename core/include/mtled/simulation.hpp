@@ -92,7 +92,7 @@ class Simulation final : public DiscreteSystem, private StepControl {
   // The step's end up to the new state: the load state moves on, the drivers update, the constraints correct the
   // engine's prediction.
   void project(double new_time, double new_load_fraction, double alpha);
-  void lower_stable_time_step(double stable_time_step) override;
+  void set_stable_time_step(double stable_time_step) override;
   // Stop the run with an InstabilityError: an inadmissible F at integration point `bad` of state u ("inverted_material"
   // or "non_finite"), or a non-finite unknown of the update.
   [[noreturn]] void inadmissible(Index bad, std::span<const double> u) const;
