@@ -500,16 +500,45 @@ void Model::pad_displacement(std::span<const double> u, int thread) const {
 }
 
 // A team task: sums the per-thread buffers in a fixed order over thread `thread`'s share of the nodes.
-void Model::reduce_thread_forces(std::span<double> f, int thread) const {
+std::span<const PointRange> Model::thread_slots(std::span<const PointRange> ranges) const {
+  if (std::equal(ranges.begin(), ranges.end(), thread_slots_of_.begin(), thread_slots_of_.end())) return thread_slots_;
+  thread_slots_of_.assign(ranges.begin(), ranges.end());
+  thread_slots_.assign(thread_forces_.size(), PointRange{0, 0});
+  for (int thread = 0; thread < team_->size(); ++thread) {
+    Index lowest = std::numeric_limits<Index>::max(), highest = -1;
+    ThreadTeam::for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
+      for (Index row = begin; row < end; ++row)
+        for (int k = 0; k < ip_rows_.size(row); ++k) {
+          const Index slot = ip_rows_.slot(ip_rows_.node(row, k));
+          lowest = std::min(lowest, slot);
+          highest = std::max(highest, slot);
+        }
+    });
+    if (highest >= 0) thread_slots_[static_cast<std::size_t>(thread)] = {lowest, highest + 1};
+  }
+  return thread_slots_;
+}
+
+void Model::reduce_thread_forces(std::span<double> f, int thread, std::span<const PointRange> slots) const {
   const auto [begin, end] = ThreadTeam::share(node_count(), thread, team_->size());
   for (std::int64_t i = begin; i < end; ++i) {
-    const auto s = static_cast<std::size_t>(ip_rows_.slot(static_cast<Index>(i)));
-    for (std::size_t c = 0; c < 3; ++c) {
-      double sum = 0.0;
-      for (const auto& buffer : thread_forces_) sum += buffer[4 * s + c];
-      f[3 * static_cast<std::size_t>(i) + c] = sum;
+    const Index s = ip_rows_.slot(static_cast<Index>(i));
+    double sum[3] = {0.0, 0.0, 0.0};
+    for (std::size_t t = 0; t < thread_forces_.size(); ++t) {
+      if (s < slots[t].first || s >= slots[t].second) continue;
+      const double* record = thread_forces_[t].data() + 4 * static_cast<std::size_t>(s);
+      for (std::size_t c = 0; c < 3; ++c) sum[c] += record[c];
     }
+    for (std::size_t c = 0; c < 3; ++c) f[3 * static_cast<std::size_t>(i) + c] = sum[c];
   }
+}
+
+// Zeroes the slots a thread's share writes into (the padding's sink slot with them: its padded entries add there).
+void Model::clear_thread_forces(int thread, std::span<const PointRange> slots) const {
+  AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
+  const PointRange range = slots[static_cast<std::size_t>(thread)];
+  std::fill(local.begin() + 4 * range.first, local.begin() + 4 * range.second, 0.0);
+  std::fill(local.end() - 4, local.end(), 0.0);
 }
 
 // The forces of integration points begin .. end - 1 into f4, in batches of consecutive points with one
@@ -564,9 +593,10 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f, std
     return volumetric_->internal_forces(*this, u, f, ranges);
   }
   std::vector<Index>& first_bad = thread_first_bad_;
+  const std::span<const PointRange> slots = thread_slots(ranges);
   team_->run([&](int thread) {
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
-    std::fill(local.begin(), local.end(), 0.0);
+    clear_thread_forces(thread, slots);
     pad_displacement(u, thread);
     team_->barrier();
     // Contiguous shares of the ranges' points, so that each thread's batches are consecutive points.
@@ -577,7 +607,7 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f, std
     });
     first_bad[static_cast<std::size_t>(thread)] = bad;
     team_->barrier();
-    reduce_thread_forces(f, thread);
+    reduce_thread_forces(f, thread, slots);
   });
   const Index bad = *std::min_element(first_bad.begin(), first_bad.end());
   return bad == std::numeric_limits<Index>::max() ? -1 : bad;
@@ -618,9 +648,10 @@ void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<do
 
 void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f,
                              std::span<const PointRange> ranges) const {
+  const std::span<const PointRange> slots = thread_slots(ranges);
   team_->run([&](int thread) {
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];
-    std::fill(local.begin(), local.end(), 0.0);
+    clear_thread_forces(thread, slots);
     double P[9][StressBatch::kCapacity];
     const bool skip[StressBatch::kCapacity] = {};
     ThreadTeam::for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
@@ -632,7 +663,7 @@ void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<do
       }
     });
     team_->barrier();
-    reduce_thread_forces(f, thread);
+    reduce_thread_forces(f, thread, slots);
   });
 }
 

@@ -157,7 +157,12 @@ class Model {
   // per node, then the padding node's zeros); the per-thread force buffers summed into f.
   void pad_displacement(std::span<const double> u, int thread) const;
   Index accumulate_forces(Index begin, Index end, double* f4, const std::function<void()>* progress = nullptr) const;
-  void reduce_thread_forces(std::span<double> f, int thread) const;
+  // The slots (begin, end) of the kernel's per-node arrays that each thread's share of `ranges` writes forces into:
+  // only those of its buffer are zeroed and summed. Slots follow the rows' first use, so a contiguous share of the
+  // points writes into a narrow band of them. Kept for the last ranges asked (the whole cloud, or an MPI rank's).
+  std::span<const PointRange> thread_slots(std::span<const PointRange> ranges) const;
+  void clear_thread_forces(int thread, std::span<const PointRange> slots) const;
+  void reduce_thread_forces(std::span<double> f, int thread, std::span<const PointRange> slots) const;
   // Support lists of arbitrary points (at least the shape functions' minimum); throws InputError naming `what`.
   std::vector<std::vector<Index>> find_supports(const std::vector<Vec3>& points, const char* what) const;
   // Shape functions at the points on those supports: store(r, k, value, gradient) for each entry, gradients only
@@ -192,6 +197,7 @@ class Model {
   mutable AlignedVector<double> padded_u_;
   mutable std::vector<AlignedVector<double>> thread_forces_;
   mutable std::vector<Index> thread_first_bad_;
+  mutable std::vector<PointRange> thread_slots_, thread_slots_of_;  // thread_slots(): per thread; for these ranges
   PointRange every_point_{0, 0};
   std::unique_ptr<ThreadTeam> team_;  // the time step's threads (setup loops use OpenMP)
 
