@@ -155,9 +155,7 @@ void StableStepMonitor::check(const StepRecord& step) {
     // arbitrary), where the step would be limited by the constraint correction's round-off, not by the dynamics.
     constexpr double kWorthRaising = 1.05, kMostOverSetupBound = 4.0;
     const double raised = std::min(target, kMostOverSetupBound * setup_estimate_);
-    if (response_ != Response::follow || !held_ || !(raised > kWorthRaising * step.step_size) ||
-        !step.integrator->report().relaxation)
-      return;
+    if (!raises_ || !held_ || !(raised > kWorthRaising * step.step_size)) return;
     if (stable_before_raise_ == 0.0) stable_before_raise_ = step.stable_time_step;
     step.control->set_stable_time_step(raised / step.time_step_factor);
     ++raised_;

@@ -26,8 +26,14 @@ class StableStepMonitor final : public StepMonitor {
   StableStepMonitor(long every, int iterations, double perturbation_length, Response response)
       : every_(every), iterations_(iterations), perturbation_length_(perturbation_length), response_(response) {}
   std::string name() const override { return "stable_step"; }
+  // "follow" raises only a steady-state integrator's step (IntegratorReport::relaxation): its time is fictitious.
+  // For any other it acts as "adapt".
+  void before_run(const StepRecord& initial) override {
+    raises_ = response_ == Response::follow && initial.integrator != nullptr &&
+              initial.integrator->report().relaxation.has_value();
+  }
   void after_step(const StepRecord& step) override {
-    if (response_ == Response::follow) follow_loads(step);
+    if (raises_) follow_loads(step);
     if (reads_displacement(step.step)) check(step);
   }
   bool reads_displacement(long step) const override {
@@ -49,6 +55,7 @@ class StableStepMonitor final : public StepMonitor {
   int iterations_;
   double perturbation_length_;
   Response response_;
+  bool raises_ = false;          // "follow" with a steady-state integrator (before_run)
   long lowered_ = 0;             // times the step was lowered
   double lowest_step_ = INFINITY;  // the smallest step it was lowered to (s)
   long raised_ = 0;              // times the step was raised ("follow")

@@ -302,6 +302,28 @@ TEST(StableStepMonitor, FollowsTheStableStepUpWhileTheLoadsAreHeld) {
   RecordProperty("difference_over_largest", std::to_string(difference / largest));
 }
 
+// Central differences' time is physical: "follow" raises nothing there and re-estimates at no hold, so a run whose load
+// is held for its last third equals the "adapt" run bitwise, lowered step included (factor 5: above the margin 0.5).
+TEST(StableStepMonitor, FollowIsAdaptForCentralDifferences) {
+  const test::OneThread one_thread;
+  auto run = [](const std::string& response) {
+    const Scene scene = make_scene(cube_scene({{"type", "central_difference"}, {"duration", 0.03}, {"load_time", 0.02},
+                                               {"damping", 60}, {"time_step_factor", 5}},
+                                              {{"stable_step", response}, {"stable_step_every_steps", 100}}, true));
+    Simulation simulation(scene, test::catalog());
+    add_scene_monitors(simulation, scene);
+    simulation.run();
+    return std::make_pair(simulation.monitor_reports().at("stable_step"),
+                          std::vector<double>(simulation.displacement().begin(), simulation.displacement().end()));
+  };
+  const auto [adapt, adapt_u] = run("adapt");
+  const auto [follow, follow_u] = run("follow");
+  EXPECT_GE(adapt.at("time_step_lowered").get<long>(), 1) << adapt.dump();
+  EXPECT_EQ(follow.at("time_step_raised").get<long>(), 0) << follow.dump();
+  EXPECT_EQ(follow.at("checks"), adapt.at("checks"));
+  EXPECT_EQ(follow_u, adapt_u);
+}
+
 TEST(StableStepMonitor, ChangesNothingInTheResultsUnderAdapt) {
   const test::OneThread one_thread;
   auto final_state = [](long every) {
