@@ -499,7 +499,6 @@ void Model::pad_displacement(std::span<const double> u, int thread) const {
   }
 }
 
-// A team task: sums the per-thread buffers in a fixed order over thread `thread`'s share of the nodes.
 std::span<const PointRange> Model::thread_slots(std::span<const PointRange> ranges) const {
   if (std::equal(ranges.begin(), ranges.end(), thread_slots_of_.begin(), thread_slots_of_.end())) return thread_slots_;
   thread_slots_of_.assign(ranges.begin(), ranges.end());
@@ -519,6 +518,8 @@ std::span<const PointRange> Model::thread_slots(std::span<const PointRange> rang
   return thread_slots_;
 }
 
+// A team task: sums the per-thread buffers in a fixed order over thread `thread`'s share of the nodes, each buffer
+// only where its thread wrote (elsewhere it held zeros: the sums are those of every buffer, bit for bit).
 void Model::reduce_thread_forces(std::span<double> f, int thread, std::span<const PointRange> slots) const {
   const auto [begin, end] = ThreadTeam::share(node_count(), thread, team_->size());
   for (std::int64_t i = begin; i < end; ++i) {
