@@ -500,22 +500,23 @@ void Model::pad_displacement(std::span<const double> u, int thread) const {
 }
 
 std::span<const PointRange> Model::thread_slots(std::span<const PointRange> ranges) const {
-  if (std::equal(ranges.begin(), ranges.end(), thread_slots_of_.begin(), thread_slots_of_.end())) return thread_slots_;
-  thread_slots_of_.assign(ranges.begin(), ranges.end());
-  thread_slots_.assign(thread_forces_.size(), PointRange{0, 0});
-  for (int thread = 0; thread < team_->size(); ++thread) {
+  for (const auto& [asked, slots] : thread_slots_)
+    if (std::equal(ranges.begin(), ranges.end(), asked.begin(), asked.end())) return slots;
+  const int threads = team_->size();
+  std::vector<PointRange> slots(static_cast<std::size_t>(threads), PointRange{0, 0});
+  for (int thread = 0; thread < threads; ++thread) {
     Index lowest = std::numeric_limits<Index>::max(), highest = -1;
-    ThreadTeam::for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
+    ThreadTeam::for_each_piece_of_share(ranges, thread, threads, [&](Index begin, Index end) {
       for (Index row = begin; row < end; ++row)
         for (int k = 0; k < ip_rows_.size(row); ++k) {
-          const Index slot = ip_rows_.slot(ip_rows_.node(row, k));
-          lowest = std::min(lowest, slot);
-          highest = std::max(highest, slot);
+          lowest = std::min(lowest, ip_rows_.entry_slot(row, k));
+          highest = std::max(highest, ip_rows_.entry_slot(row, k));
         }
     });
-    if (highest >= 0) thread_slots_[static_cast<std::size_t>(thread)] = {lowest, highest + 1};
+    if (highest >= 0) slots[static_cast<std::size_t>(thread)] = {lowest, highest + 1};
   }
-  return thread_slots_;
+  thread_slots_.emplace_back(std::vector<PointRange>(ranges.begin(), ranges.end()), std::move(slots));
+  return thread_slots_.back().second;
 }
 
 // A team task: sums the per-thread buffers in a fixed order over thread `thread`'s share of the nodes, each buffer

@@ -1,12 +1,18 @@
 #include "stable_step_monitor.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <iterator>
 
 #include "mtled/instability.hpp"
 #include "mtled/log.hpp"
 #include "mtled/model_view.hpp"
 
 namespace mtled {
+namespace {
+// /monitors/stable_step's choices, in the order of StableStepMonitor::Response.
+constexpr const char* kResponseNames[] = {"stop", "adapt", "follow"};
+}  // namespace
 
 void StableStepMonitor::declare(ComponentDeclaration& d) {
   d.integer("stable_step_every_steps")
@@ -38,12 +44,11 @@ std::unique_ptr<StableStepMonitor> StableStepMonitor::from_section(const Paramet
   const long every = monitors.integer("stable_step_every_steps");
   if (every == 0) return nullptr;
   // 1e-7 of the body's size: far inside the linear range of any element, far above round-off in the forces.
-  const std::string response = monitors.string("stable_step");
+  const std::string response = monitors.string("stable_step");  // one of the choices (validated)
+  const auto named = std::find(std::begin(kResponseNames), std::end(kResponseNames), response);
   return std::make_unique<StableStepMonitor>(every, static_cast<int>(monitors.integer("stable_step_iterations")),
                                              1e-7 * model.length_scale(),
-                                             response == "stop"    ? Response::stop
-                                             : response == "adapt" ? Response::adapt
-                                                                   : Response::follow);
+                                             static_cast<Response>(named - std::begin(kResponseNames)));
 }
 
 double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
@@ -204,7 +209,6 @@ void StableStepMonitor::refuse(const StepRecord& step) const {
 }
 
 json StableStepMonitor::report() const {
-  constexpr const char* kResponseNames[] = {"stop", "adapt", "follow"};  // in the order of Response
   json j = {{"every_steps", every_},
             {"on_step_above_estimate", kResponseNames[static_cast<int>(response_)]},
             {"checks", checks_},

@@ -38,9 +38,10 @@ class GradientRows {
   Index rows() const { return static_cast<Index>(sizes_.size()); }
   int size(Index row) const { return sizes_[row]; }  // entries, padding excluded
   std::int64_t entries() const { return entries_; }   // all rows, padding excluded
-  Index node(Index row, int k) const { return node_of_slot_[static_cast<std::size_t>(records_[position(row, k)] / 4)]; }
+  Index node(Index row, int k) const { return node_at_slot(entry_slot(row, k)); }
   // Where node `node`'s record sits in the kernel's per-node arrays (4 doubles per slot), and the node at a slot.
   Index slot(Index node) const { return slot_of_node_[static_cast<std::size_t>(node)]; }
+  Index entry_slot(Index row, int k) const { return records_[position(row, k)] / 4; }  // slot(node(row, k))
   Index node_at_slot(Index slot) const { return node_of_slot_[static_cast<std::size_t>(slot)]; }
   Vec3 gradient(Index row, int k) const;
 

@@ -159,7 +159,8 @@ class Model {
   Index accumulate_forces(Index begin, Index end, double* f4, const std::function<void()>* progress = nullptr) const;
   // The slots (begin, end) of the kernel's per-node arrays that each thread's share of `ranges` writes forces into:
   // only those of its buffer are zeroed and summed. Slots follow the rows' first use, so a contiguous share of the
-  // points writes into a narrow band of them. Kept for the last ranges asked (the whole cloud, or an MPI rank's).
+  // points writes into a narrow band of them. Kept per set of ranges asked (the whole cloud; an MPI rank's boundary
+  // and interior points, which it asks for in turn at every evaluation).
   std::span<const PointRange> thread_slots(std::span<const PointRange> ranges) const;
   void clear_thread_forces(int thread, std::span<const PointRange> slots) const;
   void reduce_thread_forces(std::span<double> f, int thread, std::span<const PointRange> slots) const;
@@ -197,7 +198,8 @@ class Model {
   mutable AlignedVector<double> padded_u_;
   mutable std::vector<AlignedVector<double>> thread_forces_;
   mutable std::vector<Index> thread_first_bad_;
-  mutable std::vector<PointRange> thread_slots_, thread_slots_of_;  // thread_slots(): per thread; for these ranges
+  // thread_slots(): for each set of ranges asked, the slots of each thread
+  mutable std::vector<std::pair<std::vector<PointRange>, std::vector<PointRange>>> thread_slots_;
   PointRange every_point_{0, 0};
   std::unique_ptr<ThreadTeam> team_;  // the time step's threads (setup loops use OpenMP)
 
