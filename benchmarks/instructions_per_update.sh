@@ -5,6 +5,7 @@
 # Callgrind counts instructions, not time: the figure does not depend on the machine's load.
 #
 # Usage: benchmarks/instructions_per_update.sh [BUILD_DIR] [WORK_DIR]     (defaults: build, a temporary folder)
+#        PRECISION=single benchmarks/instructions_per_update.sh ...           (the rows' precision; default double)
 # Prints: integration points, instructions of both runs, instructions per update, then the functions that take
 # the most of them (callgrind_annotate, self cost, the same difference per update).
 set -euo pipefail
@@ -15,7 +16,8 @@ mkdir -p "$work"
 scene=share/scenes/needle_small_sample.json
 count() {  # $1 = steps; prints the program's total instruction count
   valgrind --tool=callgrind --callgrind-out-file="$work/cg.$1" "$build/bin/mtled" run "$scene" -o "$work/run.$1" \
-    --threads 1 --set /mesh/target_nodes=2000 --set /integrator/max_steps="$1" >/dev/null 2>&1 || true
+    --threads 1 --set /mesh/target_nodes=2000 --set /integrator/max_steps="$1" \
+    --set /discretisation/precision="${PRECISION:-double}" >/dev/null 2>&1 || true
   sed -n 's/^summary: \([0-9]*\).*/\1/p' "$work/cg.$1"
 }
 short=$(count 60)

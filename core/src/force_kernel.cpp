@@ -2,8 +2,9 @@
 // hwy/foreach_target.h, which re-includes this file; HWY_DYNAMIC_DISPATCH picks the CPU's best at run time.
 //
 // Vectors of (at most) 4 doubles, one lane per support entry of a row. On AVX2 and AVX-512 a node's record
-// (x, y, z, 0) is one such vector: the displacements and gradient corrections of 4 entries are read as 4 loads
-// and a transpose, and their forces added back as a transpose and 4 read-modify-writes, which is faster than
+// (x, y, z, 0) is one such vector: the displacements of 4 entries are read as 4 loads and a transpose, and their
+// forces added back as a transpose and 4 read-modify-writes (the scatter's gradient corrections, where it forms its
+// test gradients, are read like the displacements), which is faster than
 // the gather and scatter instructions (and AVX2 has no scatter); 512-bit vectors would not be faster here, since
 // the wider cores split them in two halves anyway. Narrower targets gather and add lane by lane.
 #undef HWY_TARGET_INCLUDE
@@ -96,10 +97,12 @@ struct RowBlocks {
   const Index* records;   // kBlock per block
   const Index* records_end;
 };
+enum class Gradients { shape, test };  // what a row's gradients are: grad N (the gather), or the test gradients
 template <class Real>
-HWY_INLINE RowBlocks<Real> row_blocks(const GradientRows& rows, Index row) {
+HWY_INLINE RowBlocks<Real> row_blocks(const GradientRows& rows, Index row, Gradients which) {
   const std::int64_t begin = rows.block_begin(row);
-  return {rows.block_gradients<Real>(begin), rows.block_records(begin), rows.block_records(rows.block_end(row))};
+  return {which == Gradients::shape ? rows.block_gradients<Real>(begin) : rows.block_test_gradients<Real>(begin),
+          rows.block_records(begin), rows.block_records(rows.block_end(row))};
 }
 
 // Asks the caches for one row (its gradients and record offsets), two 64-byte lines per turn of the loop (the
@@ -113,8 +116,11 @@ HWY_INLINE void prefetch_lines(const void* begin, const void* end) {
 }
 template <class Real>
 HWY_INLINE void prefetch_row(const GradientRows& rows, Index row) {
-  prefetch_lines(rows.block_gradients<Real>(rows.block_begin(row)), rows.block_gradients<Real>(rows.block_end(row)));
-  prefetch_lines(rows.block_records(rows.block_begin(row)), rows.block_records(rows.block_end(row)));
+  const std::int64_t begin = rows.block_begin(row), end = rows.block_end(row);
+  prefetch_lines(rows.block_gradients<Real>(begin), rows.block_gradients<Real>(end));
+  if (rows.has_own_test_gradients())
+    prefetch_lines(rows.block_test_gradients<Real>(begin), rows.block_test_gradients<Real>(end));
+  prefetch_lines(rows.block_records(begin), rows.block_records(end));
 }
 
 // kLanes gradient components of consecutive entries as doubles (single-precision rows are widened on the way in).
@@ -136,7 +142,7 @@ void gather_rows(const GradientRows& rows, const double* u4, Index first, Index 
     // One accumulator per component of F, one lane per support entry; the padding entries add 0 x 0.
     V f[9];
     for (auto& v : f) v = hn::Zero(d);
-    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p);
+    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p, Gradients::shape);
     const Real* g = row.gradients;
     for (const Index* records = row.records; records != row.records_end; records += kBlock, g += 3 * kBlock) {
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
@@ -176,38 +182,67 @@ void FirstPiola(const StressBatch& batch, const double* weights, double (&P)[9][
   }
 }
 
+// f4 += the 3 x 4 forces of the entries at `records` (their test gradients t by component: x, y, z of the lanes).
+HWY_INLINE void add_entry_forces(D d, const V (&stress)[9], const V (&t)[3], const Index* records, double* f4) {
+  V force[3];
+  for (int i = 0; i < 3; ++i)
+    force[i] = hn::MulAdd(stress[3 * i + 2], t[2], hn::MulAdd(stress[3 * i + 1], t[1], hn::Mul(stress[3 * i], t[0])));
+  add_to_records(d, force[0], force[1], force[2], records, f4);
+}
+
+// The scatter where the rows store the test gradients (single precision): one stream per row, no per-node reads.
 template <class Real>
-void scatter_rows(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
-                  const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
+void scatter_stored_tests(const GradientRows& rows, Index first, int count,
+                          const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
+  const D d;
+  for (int p = 0; p < count; ++p) {
+    if (skip[p]) continue;
+    V stress[9];
+    for (int c = 0; c < 9; ++c) stress[c] = hn::Set(d, P[c][p]);
+    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p, Gradients::test);
+    const Real* t = row.gradients;
+    for (const Index* records = row.records; records != row.records_end; records += kBlock, t += 3 * kBlock)
+      for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
+        const V test[3] = {load_gradients(d, t + j), load_gradients(d, t + kBlock + j),
+                           load_gradients(d, t + 2 * kBlock + j)};
+        add_entry_forces(d, stress, test, records + j, f4);
+      }
+  }
+}
+
+// The scatter that forms t = grad N + xi - m itself (double precision: a stored copy would double the bytes the
+// kernel streams per entry, which costs more than the instructions it saves).
+template <class Real>
+void scatter_formed_tests(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
+                          const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
   const D d;
   for (int p = 0; p < count; ++p) {
     if (skip[p]) continue;
     V stress[9], mean[3];
     for (int c = 0; c < 9; ++c) stress[c] = hn::Set(d, P[c][p]);
     for (int k = 0; k < 3; ++k) mean[k] = hn::Set(d, m3[3 * static_cast<std::size_t>(first + p) + k]);
-    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p);
+    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p, Gradients::shape);
     const Real* g = row.gradients;
-    for (const Index* records = row.records; records != row.records_end; records += kBlock, g += 3 * kBlock) {
+    for (const Index* records = row.records; records != row.records_end; records += kBlock, g += 3 * kBlock)
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
-        V grad[3];
-        load_records(d, xi4, records + j, grad[0], grad[1], grad[2]);
-        for (int k = 0; k < 3; ++k) grad[k] = hn::Add(load_gradients(d, g + k * kBlock + j), hn::Sub(grad[k], mean[k]));
-        V force[3];
-        for (int i = 0; i < 3; ++i)
-          force[i] = hn::MulAdd(stress[3 * i + 2], grad[2],
-                                hn::MulAdd(stress[3 * i + 1], grad[1], hn::Mul(stress[3 * i], grad[0])));
-        add_to_records(d, force[0], force[1], force[2], records + j, f4);
+        V test[3];
+        load_records(d, xi4, records + j, test[0], test[1], test[2]);
+        for (int k = 0; k < 3; ++k)
+          test[k] = hn::Add(load_gradients(d, g + k * kBlock + j), hn::Sub(test[k], mean[k]));
+        add_entry_forces(d, stress, test, records + j, f4);
       }
-    }
   }
 }
 
 void Scatter(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
              const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
-  if (rows.precision() == RowPrecision::single_precision)
-    scatter_rows<float>(rows, xi4, m3, first, count, P, skip, f4);
+  // Only single-precision rows store their test gradients (Model::build_integration_correction).
+  if (rows.precision() == RowPrecision::double_precision)
+    scatter_formed_tests<double>(rows, xi4, m3, first, count, P, skip, f4);
+  else if (rows.has_own_test_gradients())
+    scatter_stored_tests<float>(rows, first, count, P, skip, f4);
   else
-    scatter_rows<double>(rows, xi4, m3, first, count, P, skip, f4);
+    scatter_formed_tests<float>(rows, xi4, m3, first, count, P, skip, f4);
 }
 
 }  // namespace mtled::HWY_NAMESPACE

@@ -32,28 +32,52 @@ void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index
   const auto values = static_cast<std::size_t>(3 * kBlock * blocks());
   double_gradients_.assign(precision == RowPrecision::double_precision ? values : 0, 0.0);
   single_gradients_.assign(precision == RowPrecision::single_precision ? values : 0, 0.0f);
+  double_tests_.clear();
+  single_tests_.clear();
   for (std::size_t r = 0; r < supports.size(); ++r)
     for (std::size_t k = 0; k < supports[r].size(); ++k)
       records_[position(static_cast<Index>(r), static_cast<int>(k))] = 4 * slot(supports[r][k]);
 }
 
-void GradientRows::set_gradient(Index row, int k, const Vec3& gradient) {
-  const std::size_t at = position(row, k), block = at / kBlock, lane = at % kBlock;
+// Value v at entry `position` of arrays in the block layout (3 components of kBlock entries per block), in the one
+// of the two precisions that is allocated.
+void GradientRows::store(AlignedVector<double>& doubles, AlignedVector<float>& singles, std::size_t position,
+                         const Vec3& v) {
+  const std::size_t first = 3 * kBlock * (position / kBlock) + position % kBlock;
   for (int c = 0; c < 3; ++c) {
-    const std::size_t i = (3 * block + c) * kBlock + lane;
-    if (precision_ == RowPrecision::single_precision)
-      single_gradients_[i] = static_cast<float>(gradient[c]);
+    if (singles.empty())
+      doubles[first + c * kBlock] = v[c];
     else
-      double_gradients_[i] = gradient[c];
+      singles[first + c * kBlock] = static_cast<float>(v[c]);
   }
 }
 
+Vec3 GradientRows::load(const AlignedVector<double>& doubles, const AlignedVector<float>& singles,
+                        std::size_t position) {
+  const std::size_t i = 3 * kBlock * (position / kBlock) + position % kBlock;
+  if (!singles.empty()) return {singles[i], singles[i + kBlock], singles[i + 2 * kBlock]};
+  return {doubles[i], doubles[i + kBlock], doubles[i + 2 * kBlock]};
+}
+
+void GradientRows::set_gradient(Index row, int k, const Vec3& gradient) {
+  store(double_gradients_, single_gradients_, position(row, k), gradient);
+}
+
 Vec3 GradientRows::gradient(Index row, int k) const {
-  const std::size_t at = position(row, k), block = at / kBlock, lane = at % kBlock;
-  const std::size_t i = 3 * kBlock * block + lane;
-  if (precision_ == RowPrecision::single_precision)
-    return {single_gradients_[i], single_gradients_[i + kBlock], single_gradients_[i + 2 * kBlock]};
-  return {double_gradients_[i], double_gradients_[i + kBlock], double_gradients_[i + 2 * kBlock]};
+  return load(double_gradients_, single_gradients_, position(row, k));
+}
+
+void GradientRows::set_test_gradient(Index row, int k, const Vec3& gradient) {
+  if (!has_own_test_gradients()) {
+    double_tests_ = double_gradients_;
+    single_tests_ = single_gradients_;
+  }
+  store(double_tests_, single_tests_, position(row, k), gradient);
+}
+
+Vec3 GradientRows::test_gradient(Index row, int k) const {
+  if (!has_own_test_gradients()) return gradient(row, k);
+  return load(double_tests_, single_tests_, position(row, k));
 }
 
 }  // namespace mtled

@@ -33,6 +33,10 @@ class GradientRows {
   // One row per support list; gradients zero until set.
   void assign(const std::vector<std::vector<Index>>& supports, Index padding_node, RowPrecision precision);
   void set_gradient(Index row, int k, const Vec3& gradient);
+  // The test-function gradients the force kernel's scatter reads (the model's consistent integration: grad N_I + xi_I
+  // - the mean of xi over the row), in the gradients' layout and precision. Until one is set they are the gradients
+  // themselves and take no memory; the first set_test_gradient copies the gradients, then overwrites an entry.
+  void set_test_gradient(Index row, int k, const Vec3& gradient);
 
   RowPrecision precision() const { return precision_; }
   Index rows() const { return static_cast<Index>(sizes_.size()); }
@@ -44,6 +48,7 @@ class GradientRows {
   Index entry_slot(Index row, int k) const { return records_[position(row, k)] / 4; }  // slot(node(row, k))
   Index node_at_slot(Index slot) const { return node_of_slot_[static_cast<std::size_t>(slot)]; }
   Vec3 gradient(Index row, int k) const;
+  Vec3 test_gradient(Index row, int k) const;
 
   std::int64_t block_begin(Index row) const { return block_offsets_[row]; }
   std::int64_t block_end(Index row) const { return block_offsets_[row + 1]; }
@@ -51,10 +56,15 @@ class GradientRows {
   // Real: the stored precision (float for single_precision).
   template <class Real>
   const Real* block_gradients(std::int64_t block) const;
+  template <class Real>
+  const Real* block_test_gradients(std::int64_t block) const;
+  bool has_own_test_gradients() const { return !double_tests_.empty() || !single_tests_.empty(); }
   std::int64_t blocks() const { return block_offsets_.empty() ? 0 : block_offsets_.back(); }
 
  private:
   std::size_t position(Index row, int k) const { return static_cast<std::size_t>(kBlock * block_offsets_[row] + k); }
+  static void store(AlignedVector<double>& doubles, AlignedVector<float>& singles, std::size_t position, const Vec3& v);
+  static Vec3 load(const AlignedVector<double>& doubles, const AlignedVector<float>& singles, std::size_t position);
 
   RowPrecision precision_ = RowPrecision::double_precision;
   std::vector<std::int64_t> block_offsets_;
@@ -64,6 +74,8 @@ class GradientRows {
   AlignedVector<Index> records_;
   AlignedVector<double> double_gradients_;  // the one the precision names is filled
   AlignedVector<float> single_gradients_;
+  AlignedVector<double> double_tests_;  // empty until a test gradient is set; then as the gradients
+  AlignedVector<float> single_tests_;
 };
 
 template <>
@@ -73,6 +85,14 @@ inline const double* GradientRows::block_gradients<double>(std::int64_t block) c
 template <>
 inline const float* GradientRows::block_gradients<float>(std::int64_t block) const {
   return single_gradients_.data() + 3 * kBlock * block;
+}
+template <>
+inline const double* GradientRows::block_test_gradients<double>(std::int64_t block) const {
+  return double_tests_.empty() ? block_gradients<double>(block) : double_tests_.data() + 3 * kBlock * block;
+}
+template <>
+inline const float* GradientRows::block_test_gradients<float>(std::int64_t block) const {
+  return single_tests_.empty() ? block_gradients<float>(block) : single_tests_.data() + 3 * kBlock * block;
 }
 
 }  // namespace mtled
