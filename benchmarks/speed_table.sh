@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # The speed table of docs/performance.md on this machine: the CPU and its instruction set, the memory bandwidth a
 # copy reaches on 1 and 2 threads (the probe the kernel is measured against), then the default scene (whole run) and
-# the brain phantom (first 200 steps; FULL=1 for the whole 100 mm run) on 2 threads, in double and single precision,
-# and, given a second build (an older commit built in its own worktree), the same runs of it side by side.
+# the brain phantom (first 200 steps; FULL=1 for the whole 100 mm run) on 2 threads, in single (the default) and double
+# precision, and, given a second build (an older commit built in its own worktree), the same runs of it side by side.
 # Per run: wall and solve time, steps, integration-point updates per second, the bytes the force kernel must move per
 # update, the bandwidth it reached and its fraction of the copy's, and the floating-point operations per update
-# (a count from the kernel's arithmetic: 18 per support entry for F, 24 for the forces, about 450 per point for the
-# Ogden stress and P).
+# (a count from the kernel's arithmetic: 18 per support entry for F, 18 for the forces from the stored test gradients
+# of single-precision rows or 24 where double rows form them, about 450 per point for the Ogden stress and P).
 # Usage: benchmarks/speed_table.sh [BUILD_DIR] [OLD_BUILD_DIR]      (defaults: build, none; the older build runs the
 #        scenes of its own source tree, the folder above OLD_BUILD_DIR, as a user of that commit would)
 #        SIMD=avx2 runs the new build's kernels on AVX2 (a stand-in for an AVX2-only CPU on an AVX-512 one).
@@ -39,7 +39,8 @@ import json, sys
 s, label, copy = json.load(open(sys.argv[1])), sys.argv[2], float(sys.argv[3])
 b = s.get("backend", {})
 points, mean = s["integration_points"], s.get("support_size", {}).get("mean")
-flops = f"{42 * mean + 450:.0f}" if mean else ""
+per_entry = 42 if label.endswith(("-double", "-old")) else 36  # double rows (and the older build) form t
+flops = f"{per_entry * mean + 450:.0f}" if mean else ""
 kernel = ""
 if "force_kernel_s" in b:
     per_update = b["force_kernel_bytes"] / points
@@ -53,14 +54,14 @@ PY
 echo
 echo "| run (2 threads) | SIMD | wall s | solve s | steps | M updates/s | kernel bytes/update | kernel GB/s (of the 2-thread copy) | flops/update |"
 echo "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"
-single=(--set '/discretisation/precision="single"')
+double=(--set '/discretisation/precision="double"')
 for label_scene in "default:share/scenes/needle_small_sample.json" "brain:share/scenes/needle_brain_phantom.json"; do
   label=${label_scene%%:*}
   scene=${label_scene#*:}
   extra=()
   [ "$label" = brain ] && extra=("${steps[@]}")
   run "$label" "$build/bin/mtled" "$scene" "${extra[@]}"
-  run "$label-single" "$build/bin/mtled" "$scene" "${extra[@]}" "${single[@]}"
+  run "$label-double" "$build/bin/mtled" "$scene" "${extra[@]}" "${double[@]}"
   [ -n "$old" ] && run "$label-old" "$old/bin/mtled" "$(dirname "$old")/$scene" "${extra[@]}"
 done
 rm -rf "$work"

@@ -47,16 +47,18 @@ run() {
   echo "$name: exit $(cat "$work/$name.exit") ($(tail -n 1 "$work/$name.log" | cut -c1-150))"
 }
 echo "== runs"
+# Double precision is the reference the single-precision runs are compared with (single is the scenes' default).
+double=(--set '/discretisation/precision="double"')
 single=(--set '/discretisation/precision="single"')
-run default_cpu 300 needle_small_sample --threads "$threads"
-run default_gpu 300 needle_small_sample --backend cuda
+run default_cpu 300 needle_small_sample --threads "$threads" "${double[@]}"
+run default_gpu 300 needle_small_sample --backend cuda "${double[@]}"
 run default_gpu_single 300 needle_small_sample --backend cuda "${single[@]}"
-run brain200_cpu 300 needle_brain_phantom --threads "$threads" --set /integrator/max_steps=200
-run brain200_gpu 300 needle_brain_phantom --backend cuda --set /integrator/max_steps=200
-run brain_gpu 400 needle_brain_phantom --backend cuda
+run brain200_cpu 300 needle_brain_phantom --threads "$threads" --set /integrator/max_steps=200 "${double[@]}"
+run brain200_gpu 300 needle_brain_phantom --backend cuda --set /integrator/max_steps=200 "${double[@]}"
+run brain_gpu 400 needle_brain_phantom --backend cuda "${double[@]}"
 run brain_gpu_single 400 needle_brain_phantom --backend cuda "${single[@]}"
 # The full run on the CPU takes minutes: CPU_FULL_RUN_LIMIT_S bounds it (0 leaves it out).
-[ "$cpu_limit" -gt 0 ] && run brain_cpu "$cpu_limit" needle_brain_phantom --threads "$threads"
+[ "$cpu_limit" -gt 0 ] && run brain_cpu "$cpu_limit" needle_brain_phantom --threads "$threads" "${double[@]}"
 
 echo "== table"
 python3 - "$work" "$mtled" "$(cat "$work/bandwidth.txt" 2>/dev/null || echo 0)" <<'PY'

@@ -75,7 +75,7 @@ void GradientRows::set_test_gradient(Index row, int k, const Vec3& gradient) {
   store(double_tests_, single_tests_, position(row, k), gradient);
 }
 
-Vec3 GradientRows::test_gradient(Index row, int k) const {
+Vec3 GradientRows::stored_test_gradient(Index row, int k) const {
   if (!has_own_test_gradients()) return gradient(row, k);
   return load(double_tests_, single_tests_, position(row, k));
 }

@@ -326,7 +326,7 @@ void Model::build_integration_correction() {
   if (ip_rows_.precision() != RowPrecision::single_precision) return;
   for (Index ip = 0; ip < integration_point_count(); ++ip)
     for (int k = 0; k < ip_rows_.size(ip); ++k)
-      ip_rows_.set_test_gradient(ip, k, ip_rows_.gradient(ip, k) + gradient_correction(ip, ip_rows_.node(ip, k)));
+      ip_rows_.set_test_gradient(ip, k, test_gradient(ip, k));
 }
 
 // The corrections: with delta_I(p) = xi_I - mean_{J in p} xi_J, node I's constraint sum_p w_p delta_I(p) = r_I
@@ -679,9 +679,14 @@ void Model::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<do
 
 std::int64_t Model::streamed_bytes_per_force_evaluation() const {
   const std::int64_t real = ip_rows_.precision() == RowPrecision::single_precision ? 4 : 8;
-  const std::int64_t rows = ip_rows_.blocks() * GradientRows::kBlock * (static_cast<std::int64_t>(sizeof(Index)) + 3 * real);
-  const std::int64_t points = integration_point_count() * (8 + 3 * 8 + 2);
-  const std::int64_t per_node = 4 * 8 * (2 + 3 * team_->size()) + 3 * 8 * 2;  // u and xi; buffers; u in, f out
+  // Rows with their own test gradients stream them too, and read no corrections (xi per node, the mean per point).
+  const bool stored_tests = ip_rows_.has_own_test_gradients();
+  const std::int64_t gradients = (stored_tests ? 2 : 1) * 3 * real;
+  const std::int64_t rows =
+      ip_rows_.blocks() * GradientRows::kBlock * (static_cast<std::int64_t>(sizeof(Index)) + gradients);
+  const std::int64_t points = integration_point_count() * (8 + (stored_tests ? 0 : 3 * 8) + 2);
+  // u (and xi); the force buffers; u in, f out
+  const std::int64_t per_node = 4 * 8 * ((stored_tests ? 1 : 2) + 3 * team_->size()) + 3 * 8 * 2;
   return rows + points + (static_cast<std::int64_t>(node_count()) + 1) * per_node;
 }
 

@@ -48,7 +48,7 @@ class GradientRows {
   Index entry_slot(Index row, int k) const { return records_[position(row, k)] / 4; }  // slot(node(row, k))
   Index node_at_slot(Index slot) const { return node_of_slot_[static_cast<std::size_t>(slot)]; }
   Vec3 gradient(Index row, int k) const;
-  Vec3 test_gradient(Index row, int k) const;
+  Vec3 stored_test_gradient(Index row, int k) const;  // as the kernel reads it (the gradient where none is stored)
 
   std::int64_t block_begin(Index row) const { return block_offsets_[row]; }
   std::int64_t block_end(Index row) const { return block_offsets_[row + 1]; }

@@ -45,7 +45,8 @@ class Model {
     std::shared_ptr<VolumetricTreatment> volumetric;
     // Threads of the force evaluation; 0: OpenMP's count (omp_get_max_threads(), set by --threads).
     int threads = 0;
-    // The precision of the kernel's gradient rows (RowPrecision).
+    // The precision of the kernel's rows (RowPrecision). Double here, for code that builds models itself and checks
+    // round-off; scenes default to single (/discretisation/precision).
     RowPrecision precision = RowPrecision::double_precision;
     // Per tet, the group its integration points belong to (empty: one group). The points are numbered group by
     // group (tet order within a group), so that each group's points are one contiguous range: a distributed step
@@ -98,6 +99,11 @@ class Model {
     const double* mean = xi_mean_.data() + 3 * static_cast<std::size_t>(ip);
     return {xi[0] - mean[0], xi[1] - mean[1], xi[2] - mean[2]};
   }
+  // The test-function gradient of entry k of integration point ip: the stored gradient plus its correction, what the
+  // internal forces multiply the stress by (f_I = sum_p w_p P_p t_pI).
+  Vec3 test_gradient(Index ip, int k) const {
+    return ip_rows_.gradient(ip, k) + gradient_correction(ip, ip_rows_.node(ip, k));
+  }
 
   // The integration points of cell group g (Options::cell_groups): [first, second).
   std::pair<Index, Index> group_points(int group) const {
@@ -122,9 +128,9 @@ class Model {
   std::vector<PointRange> points_read(std::span<const PointRange> ranges) const;
   double strain_energy(std::span<const double> u) const;
   // The fewest bytes one internal_forces() call must move through memory: the rows once (padding included; the
-  // scatter re-reads them from the cache), each point's weight, mean correction and material, the per-node
-  // displacements, corrections and forces once (each thread's force buffer zeroed, filled and summed). Over the
-  // call's time, the kernel's achieved memory bandwidth.
+  // scatter re-reads them from the cache; stored test gradients too), each point's weight, mean correction (unless
+  // the rows store test gradients) and material, the per-node displacements, corrections and forces once (each
+  // thread's force buffer zeroed, filled and summed). Over the call's time, the kernel's achieved memory bandwidth.
   std::int64_t streamed_bytes_per_force_evaluation() const;
   const VolumetricTreatment* volumetric_treatment() const { return volumetric_.get(); }
 

@@ -66,8 +66,7 @@ DeviceLayout<Real> build_device_layout(const Model& model) {
     for (Index p = 0; p < layout.points; ++p)
       for (int k = 0; k < gradients.size(p); ++k) {
         const Index node = gradients.node(p, k);
-        tests[static_cast<std::size_t>(next[static_cast<std::size_t>(node)]++)] =
-            gradients.gradient(p, k) + model.gradient_correction(p, node);
+        tests[static_cast<std::size_t>(next[static_cast<std::size_t>(node)]++)] = model.test_gradient(p, k);
       }
   }
 
