@@ -2,11 +2,11 @@
 // hwy/foreach_target.h, which re-includes this file; HWY_DYNAMIC_DISPATCH picks the CPU's best at run time.
 //
 // Vectors of (at most) 4 doubles, one lane per support entry of a row. On AVX2 and AVX-512 a node's record
-// (x, y, z, 0) is one such vector: the displacements of 4 entries are read as 4 loads and a transpose, and their
-// forces added back as a transpose and 4 read-modify-writes (the scatter's gradient corrections, where it forms its
-// test gradients, are read like the displacements), which is faster than
-// the gather and scatter instructions (and AVX2 has no scatter); 512-bit vectors would not be faster here, since
-// the wider cores split them in two halves anyway. Narrower targets gather and add lane by lane.
+// (x, y, z, 0) is one such vector: the displacements of 4 entries (and the nodes' corrections, where the scatter
+// forms its test gradients) are read as 4 loads and a transpose, and their forces added back as a transpose and 4
+// read-modify-writes, which is faster than the gather and scatter instructions (and AVX2 has no scatter); 512-bit
+// vectors would not be faster here, since the wider cores split them in two halves anyway. Narrower targets gather
+// and add lane by lane.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "force_kernel.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -236,7 +236,8 @@ void scatter_formed_tests(const GradientRows& rows, const double* xi4, const dou
 
 void Scatter(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
              const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
-  // Only single-precision rows store their test gradients (Model::build_integration_correction).
+  // Only single-precision rows store their test gradients (Model::build_integration_correction), and only where
+  // consistent integration corrects them (without it xi and m are zero, and the formed ones are the gradients).
   if (rows.precision() == RowPrecision::double_precision)
     scatter_formed_tests<double>(rows, xi4, m3, first, count, P, skip, f4);
   else if (rows.has_own_test_gradients())

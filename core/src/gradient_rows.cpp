@@ -39,23 +39,23 @@ void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index
       records_[position(static_cast<Index>(r), static_cast<int>(k))] = 4 * slot(supports[r][k]);
 }
 
-// Value v at entry `position` of arrays in the block layout (3 components of kBlock entries per block), in the one
-// of the two precisions that is allocated.
+// A block holds the x, then the y, then the z components of its kBlock entries.
 void GradientRows::store(AlignedVector<double>& doubles, AlignedVector<float>& singles, std::size_t position,
-                         const Vec3& v) {
+                         const Vec3& v) const {
   const std::size_t first = 3 * kBlock * (position / kBlock) + position % kBlock;
   for (int c = 0; c < 3; ++c) {
-    if (singles.empty())
-      doubles[first + c * kBlock] = v[c];
-    else
+    if (precision_ == RowPrecision::single_precision)
       singles[first + c * kBlock] = static_cast<float>(v[c]);
+    else
+      doubles[first + c * kBlock] = v[c];
   }
 }
 
 Vec3 GradientRows::load(const AlignedVector<double>& doubles, const AlignedVector<float>& singles,
-                        std::size_t position) {
+                        std::size_t position) const {
   const std::size_t i = 3 * kBlock * (position / kBlock) + position % kBlock;
-  if (!singles.empty()) return {singles[i], singles[i + kBlock], singles[i + 2 * kBlock]};
+  if (precision_ == RowPrecision::single_precision)
+    return {singles[i], singles[i + kBlock], singles[i + 2 * kBlock]};
   return {doubles[i], doubles[i + kBlock], doubles[i + 2 * kBlock]};
 }
 

@@ -63,8 +63,9 @@ class GradientRows {
 
  private:
   std::size_t position(Index row, int k) const { return static_cast<std::size_t>(kBlock * block_offsets_[row] + k); }
-  static void store(AlignedVector<double>& doubles, AlignedVector<float>& singles, std::size_t position, const Vec3& v);
-  static Vec3 load(const AlignedVector<double>& doubles, const AlignedVector<float>& singles, std::size_t position);
+  // Entry `position` of a pair of arrays in the block layout, in the array of the rows' precision.
+  void store(AlignedVector<double>& doubles, AlignedVector<float>& singles, std::size_t position, const Vec3& v) const;
+  Vec3 load(const AlignedVector<double>& doubles, const AlignedVector<float>& singles, std::size_t position) const;
 
   RowPrecision precision_ = RowPrecision::double_precision;
   std::vector<std::int64_t> block_offsets_;
