@@ -165,8 +165,7 @@ TEST(Model, SinglePrecisionRowsStoreTheTestGradientsDoubleRowsFormThem) {
     for (int k = 0; k < rows.size(ip); ++k) {
       const Vec3 correction = single->gradient_correction(ip, rows.node(ip, k));
       largest_correction = std::max(largest_correction, correction.cwiseAbs().maxCoeff());
-      ASSERT_EQ(single->test_gradient(ip, k), Vec3(rows.gradient(ip, k) + correction));
-      const Vec3 expected = rounded_to_float(single->test_gradient(ip, k));
+      const Vec3 expected = rounded_to_float(rows.gradient(ip, k) + correction);
       ASSERT_EQ(rows.stored_test_gradient(ip, k), expected) << "point " << ip << ", entry " << k;
     }
   EXPECT_GT(largest_correction, 0.0) << "the corrections took part";
