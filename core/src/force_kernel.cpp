@@ -88,47 +88,38 @@ HWY_INLINE void add_to_records(D d, V x, V y, V z, const Index* offsets, double*
 }
 #endif
 
-// One row's blocks as raw pointers, for loops that step through them (in locals: the compiler cannot tell that
-// the kernel's stores do not move the rows' arrays, and would reload them after every store). The loops step the
-// two pointers and stop at records_end, which keeps one counter fewer than a block index.
+// One row's blocks (gradients and records, RowBlock) as raw pointers, for loops that step through them (in locals:
+// the compiler cannot tell that the kernel's stores do not move the rows' arrays, and would reload them after every
+// store).
 template <class Real>
 struct RowBlocks {
-  const Real* gradients;  // 3 kBlock per block
-  const Index* records;   // kBlock per block
-  const Index* records_end;
+  const RowBlock<Real>* begin;
+  const RowBlock<Real>* end;
 };
-enum class Gradients { shape, test };  // what a row's gradients are: grad N (the gather), or the test gradients
 template <class Real>
-HWY_INLINE RowBlocks<Real> row_blocks(const GradientRows& rows, Index row, Gradients which) {
-  const std::int64_t begin = rows.block_begin(row);
-  return {which == Gradients::shape ? rows.block_gradients<Real>(begin) : rows.block_test_gradients<Real>(begin),
-          rows.block_records(begin), rows.block_records(rows.block_end(row))};
+HWY_INLINE RowBlocks<Real> row_blocks(const GradientRows& rows, Index row) {
+  return {rows.block<Real>(rows.block_begin(row)), rows.block<Real>(rows.block_end(row))};
 }
 
-// Asks the caches for one row (its gradients and record offsets), two 64-byte lines per turn of the loop (the
-// loop's own instructions cost as much as the prefetches). The second line of the last turn may lie past the row: a
-// prefetch never faults.
-HWY_INLINE void prefetch_lines(const void* begin, const void* end) {
-  for (const char* line = static_cast<const char*>(begin); line < static_cast<const char*>(end); line += 128) {
-    hwy::Prefetch(line);
-    hwy::Prefetch(line + 64);
-  }
-}
-template <class Real>
-HWY_INLINE void prefetch_row(const GradientRows& rows, Index row) {
-  const std::int64_t begin = rows.block_begin(row), end = rows.block_end(row);
-  prefetch_lines(rows.block_gradients<Real>(begin), rows.block_gradients<Real>(end));
-  if (rows.has_own_test_gradients())
-    prefetch_lines(rows.block_test_gradients<Real>(begin), rows.block_test_gradients<Real>(end));
-  prefetch_lines(rows.block_records(begin), rows.block_records(end));
+// How far ahead of its reads the kernel asks the caches for a stream's lines: about one batch of rows (8 points of
+// 30-50 entries), so that a line arrives while the batch before it is computed. The consecutive points' rows lie one
+// after another, so one fixed distance serves every row; near the end the prefetches run past it (they never fault).
+constexpr std::ptrdiff_t kPrefetchBytes = 4096;
+// Asks for the lines of `bytes` bytes at kPrefetchBytes past p (one line for a single-precision block). The address
+// is formed as an integer: past the array's end a pointer may not point.
+template <std::size_t bytes>
+HWY_INLINE void prefetch_ahead(const void* p) {
+  const std::uintptr_t ahead = reinterpret_cast<std::uintptr_t>(p) + kPrefetchBytes;
+  for (std::size_t line = 0; line < bytes; line += 64) hwy::Prefetch(reinterpret_cast<const char*>(ahead + line));
 }
 
 // kLanes gradient components of consecutive entries as doubles (single-precision rows are widened on the way in).
-HWY_INLINE V load_gradients(D d, const double* g) { return hn::Load(d, g); }
+// (Unaligned: a double-precision block is 112 bytes, so every other one starts off a 32-byte boundary.)
+HWY_INLINE V load_gradients(D d, const double* g) { return hn::LoadU(d, g); }
 HWY_INLINE V load_gradients(D d, const float* g) { return hn::PromoteTo(d, hn::LoadU(hn::Rebind<float, D>(), g)); }
 
 template <class Real>
-void gather_rows(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch) {
+void gather_rows(const GradientRows& rows, const double* u4, Index first, StressBatch& batch) {
   const D d;
   constexpr double kIdentity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   for (int p = 0; p < StressBatch::kCapacity; ++p) {
@@ -136,20 +127,17 @@ void gather_rows(const GradientRows& rows, const double* u4, Index first, Index 
       for (int c = 0; c < 9; ++c) batch.F[c][p] = kIdentity[c];
       continue;
     }
-    // The row one batch ahead starts streaming from memory while this batch is computed, one row per row, so
-    // that the requests do not queue up.
-    if (first + p + batch.count < prefetch_end) prefetch_row<Real>(rows, first + p + batch.count);
     // One accumulator per component of F, one lane per support entry; the padding entries add 0 x 0.
     V f[9];
     for (auto& v : f) v = hn::Zero(d);
-    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p, Gradients::shape);
-    const Real* g = row.gradients;
-    for (const Index* records = row.records; records != row.records_end; records += kBlock, g += 3 * kBlock) {
+    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p);
+    for (const RowBlock<Real>* block = row.begin; block != row.end; ++block) {
+      prefetch_ahead<sizeof(RowBlock<Real>)>(block);
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
         V u[3];
-        load_records(d, u4, records + j, u[0], u[1], u[2]);
-        const V grad[3] = {load_gradients(d, g + j), load_gradients(d, g + kBlock + j),
-                           load_gradients(d, g + 2 * kBlock + j)};
+        load_records(d, u4, block->records + j, u[0], u[1], u[2]);
+        const V grad[3] = {load_gradients(d, block->gradients[0] + j), load_gradients(d, block->gradients[1] + j),
+                           load_gradients(d, block->gradients[2] + j)};
         for (int i = 0; i < 3; ++i)
           for (int k = 0; k < 3; ++k) f[3 * i + k] = hn::MulAdd(u[i], grad[k], f[3 * i + k]);
       }
@@ -161,11 +149,11 @@ void gather_rows(const GradientRows& rows, const double* u4, Index first, Index 
   }
 }
 
-void Gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch) {
+void Gather(const GradientRows& rows, const double* u4, Index first, StressBatch& batch) {
   if (rows.precision() == RowPrecision::single_precision)
-    gather_rows<float>(rows, u4, first, prefetch_end, batch);
+    gather_rows<float>(rows, u4, first, batch);
   else
-    gather_rows<double>(rows, u4, first, prefetch_end, batch);
+    gather_rows<double>(rows, u4, first, batch);
 }
 
 void FirstPiola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]) {
@@ -190,28 +178,33 @@ HWY_INLINE void add_entry_forces(D d, const V (&stress)[9], const V (&t)[3], con
   add_to_records(d, force[0], force[1], force[2], records, f4);
 }
 
-// The scatter where the rows store the test gradients (single precision): one stream per row, no per-node reads.
+// The scatter where the rows store the test gradients (single precision): their stream and the blocks' records (in
+// cache: the gather has just read them), no per-node reads.
 template <class Real>
 void scatter_stored_tests(const GradientRows& rows, Index first, int count,
                           const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
   const D d;
+  constexpr std::size_t kTestBlockBytes = 3 * kBlock * sizeof(Real);
   for (int p = 0; p < count; ++p) {
     if (skip[p]) continue;
     V stress[9];
     for (int c = 0; c < 9; ++c) stress[c] = hn::Set(d, P[c][p]);
-    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p, Gradients::test);
-    const Real* t = row.gradients;
-    for (const Index* records = row.records; records != row.records_end; records += kBlock, t += 3 * kBlock)
+    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p);
+    const Real* t = rows.block_test_gradients<Real>(rows.block_begin(first + p));
+    for (const RowBlock<Real>* block = row.begin; block != row.end; ++block, t += 3 * kBlock) {
+      prefetch_ahead<kTestBlockBytes>(t);
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
         const V test[3] = {load_gradients(d, t + j), load_gradients(d, t + kBlock + j),
                            load_gradients(d, t + 2 * kBlock + j)};
-        add_entry_forces(d, stress, test, records + j, f4);
+        add_entry_forces(d, stress, test, block->records + j, f4);
       }
+    }
   }
 }
 
 // The scatter that forms t = grad N + xi - m itself (double precision: a stored copy would double the bytes the
-// kernel streams per entry, which costs more than the instructions it saves).
+// kernel streams per entry, which costs more than the instructions it saves). The blocks are in cache (the gather
+// has just read them); the nodes' corrections are read like the displacements.
 template <class Real>
 void scatter_formed_tests(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
                           const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4) {
@@ -221,15 +214,14 @@ void scatter_formed_tests(const GradientRows& rows, const double* xi4, const dou
     V stress[9], mean[3];
     for (int c = 0; c < 9; ++c) stress[c] = hn::Set(d, P[c][p]);
     for (int k = 0; k < 3; ++k) mean[k] = hn::Set(d, m3[3 * static_cast<std::size_t>(first + p) + k]);
-    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p, Gradients::shape);
-    const Real* g = row.gradients;
-    for (const Index* records = row.records; records != row.records_end; records += kBlock, g += 3 * kBlock)
+    const RowBlocks<Real> row = row_blocks<Real>(rows, first + p);
+    for (const RowBlock<Real>* block = row.begin; block != row.end; ++block)
       for (int j = 0; j < kBlock; j += static_cast<int>(hn::Lanes(d))) {
         V test[3];
-        load_records(d, xi4, records + j, test[0], test[1], test[2]);
+        load_records(d, xi4, block->records + j, test[0], test[1], test[2]);
         for (int k = 0; k < 3; ++k)
-          test[k] = hn::Add(load_gradients(d, g + k * kBlock + j), hn::Sub(test[k], mean[k]));
-        add_entry_forces(d, stress, test, records + j, f4);
+          test[k] = hn::Add(load_gradients(d, block->gradients[k] + j), hn::Sub(test[k], mean[k]));
+        add_entry_forces(d, stress, test, block->records + j, f4);
       }
   }
 }
@@ -255,8 +247,8 @@ HWY_EXPORT(Gather);
 HWY_EXPORT(FirstPiola);
 HWY_EXPORT(Scatter);
 
-void gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch) {
-  HWY_DYNAMIC_DISPATCH(Gather)(rows, u4, first, prefetch_end, batch);
+void gather(const GradientRows& rows, const double* u4, Index first, StressBatch& batch) {
+  HWY_DYNAMIC_DISPATCH(Gather)(rows, u4, first, batch);
 }
 void first_piola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]) {
   HWY_DYNAMIC_DISPATCH(FirstPiola)(batch, weights, P);

@@ -15,9 +15,9 @@
 
 namespace mtled::force_kernel {
 
-// batch.F for integration points first .. first + batch.count - 1; meanwhile asks the caches for the rows of
-// the next as many points, up to prefetch_end (exclusive).
-void gather(const GradientRows& rows, const double* u4, Index first, Index prefetch_end, StressBatch& batch);
+// batch.F for integration points first .. first + batch.count - 1; gather and scatter ask the caches for the rows'
+// lines a few kilobytes ahead as they read them (the next points' rows lie next in memory).
+void gather(const GradientRows& rows, const double* u4, Index first, StressBatch& batch);
 // P[c][p] = w_p (F S)_c of lane p (c = 3 i + j), for every lane.
 void first_piola(const StressBatch& batch, const double* weights, double (&P)[9][StressBatch::kCapacity]);
 // f4 += P t over the rows of integration points first .. first + count - 1, lane p of P for point first + p; lanes

@@ -1,5 +1,8 @@
 #include "mtled/gradient_rows.hpp"
 
+#include <algorithm>
+#include <iterator>
+
 namespace mtled {
 
 void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index padding_node, RowPrecision precision) {
@@ -28,56 +31,60 @@ void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index
   for (Index node = 0; node < padding_node; ++node) give_slot(node);
   slot_of_node_[static_cast<std::size_t>(padding_node)] = padding_node;
   node_of_slot_.push_back(padding_node);
-  records_.assign(static_cast<std::size_t>(kBlock * blocks()), 4 * padding_node);
-  const auto values = static_cast<std::size_t>(3 * kBlock * blocks());
-  double_gradients_.assign(precision == RowPrecision::double_precision ? values : 0, 0.0);
-  single_gradients_.assign(precision == RowPrecision::single_precision ? values : 0, 0.0f);
-  double_tests_.clear();
-  single_tests_.clear();
-  for (std::size_t r = 0; r < supports.size(); ++r)
-    for (std::size_t k = 0; k < supports[r].size(); ++k)
-      records_[position(static_cast<Index>(r), static_cast<int>(k))] = 4 * slot(supports[r][k]);
+  with_arrays([&](auto& blocks, auto& tests) {
+    blocks.assign(static_cast<std::size_t>(this->blocks()), {});
+    tests.clear();
+    for (auto& block : blocks) std::fill(std::begin(block.records), std::end(block.records), 4 * padding_node);
+    for (std::size_t r = 0; r < supports.size(); ++r)
+      for (std::size_t k = 0; k < supports[r].size(); ++k) {
+        const std::size_t p = position(static_cast<Index>(r), static_cast<int>(k));
+        blocks[p / kBlock].records[p % kBlock] = 4 * slot(supports[r][k]);
+      }
+  });
 }
 
-// A block holds the x, then the y, then the z components of its kBlock entries.
-void GradientRows::store(AlignedVector<double>& doubles, AlignedVector<float>& singles, std::size_t position,
-                         const Vec3& v) const {
-  const std::size_t first = 3 * kBlock * (position / kBlock) + position % kBlock;
-  for (int c = 0; c < 3; ++c) {
-    if (precision_ == RowPrecision::single_precision)
-      singles[first + c * kBlock] = static_cast<float>(v[c]);
-    else
-      doubles[first + c * kBlock] = v[c];
-  }
-}
-
-Vec3 GradientRows::load(const AlignedVector<double>& doubles, const AlignedVector<float>& singles,
-                        std::size_t position) const {
-  const std::size_t i = 3 * kBlock * (position / kBlock) + position % kBlock;
-  if (precision_ == RowPrecision::single_precision)
-    return {singles[i], singles[i + kBlock], singles[i + 2 * kBlock]};
-  return {doubles[i], doubles[i + kBlock], doubles[i + 2 * kBlock]};
+Index GradientRows::record(std::size_t position) const {
+  return with_arrays(
+      [&](const auto& blocks, const auto&) { return blocks[position / kBlock].records[position % kBlock]; });
 }
 
 void GradientRows::set_gradient(Index row, int k, const Vec3& gradient) {
-  store(double_gradients_, single_gradients_, position(row, k), gradient);
+  const std::size_t p = position(row, k);
+  with_arrays([&](auto& blocks, auto&) {
+    for (int c = 0; c < 3; ++c)
+      blocks[p / kBlock].gradients[c][p % kBlock] = static_cast<real_of<decltype(blocks)>>(gradient[c]);
+  });
 }
 
 Vec3 GradientRows::gradient(Index row, int k) const {
-  return load(double_gradients_, single_gradients_, position(row, k));
+  const std::size_t p = position(row, k);
+  return with_arrays([&](const auto& blocks, const auto&) {
+    const auto& g = blocks[p / kBlock].gradients;
+    return Vec3{g[0][p % kBlock], g[1][p % kBlock], g[2][p % kBlock]};
+  });
 }
 
+// The test gradients: 3 x kBlock per block, the x, then the y, then the z components of its entries.
 void GradientRows::set_test_gradient(Index row, int k, const Vec3& gradient) {
-  if (!has_own_test_gradients()) {
-    double_tests_ = double_gradients_;
-    single_tests_ = single_gradients_;
-  }
-  store(double_tests_, single_tests_, position(row, k), gradient);
+  const std::size_t p = position(row, k);
+  with_arrays([&](const auto& blocks, auto& tests) {
+    if (tests.empty()) {  // a copy of the gradients first
+      tests.resize(3 * kBlock * blocks.size());
+      for (std::size_t b = 0; b < blocks.size(); ++b)
+        for (int c = 0; c < 3; ++c)
+          std::copy_n(blocks[b].gradients[c], kBlock,
+                      tests.begin() + static_cast<std::ptrdiff_t>(test_index(kBlock * b, c)));
+    }
+    for (int c = 0; c < 3; ++c) tests[test_index(p, c)] = static_cast<real_of<decltype(blocks)>>(gradient[c]);
+  });
 }
 
 Vec3 GradientRows::stored_test_gradient(Index row, int k) const {
   if (!has_own_test_gradients()) return gradient(row, k);
-  return load(double_tests_, single_tests_, position(row, k));
+  const std::size_t p = position(row, k);
+  return with_arrays([&](const auto&, const auto& tests) {
+    return Vec3{tests[test_index(p, 0)], tests[test_index(p, 1)], tests[test_index(p, 2)]};
+  });
 }
 
 }  // namespace mtled

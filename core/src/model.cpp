@@ -567,7 +567,7 @@ Index Model::accumulate_forces(Index begin, Index end, double* f4, const std::fu
     int count = 1;
     while (count < kCapacity && first + count < end && ip_material_[first + count] == material) ++count;
     batch.count = count;
-    force_kernel::gather(ip_rows_, padded_u_.data(), first, end, batch);
+    force_kernel::gather(ip_rows_, padded_u_.data(), first, batch);
     materials_[material]->stress_batch(batch);
     for (int p = 0; p < kCapacity; ++p) {
       weights[p] = p < count ? ip_weight_[first + p] : 0.0;
@@ -639,7 +639,7 @@ Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F,
     ThreadTeam::for_each_piece_of_share(ranges, thread, team_->size(), [&](Index begin, Index end) {
       for (Index first = begin; first < end; first += batch.count) {
         batch.count = std::min<Index>(StressBatch::kCapacity, end - first);
-        force_kernel::gather(ip_rows_, padded_u_.data(), first, end, batch);
+        force_kernel::gather(ip_rows_, padded_u_.data(), first, batch);
         for (int p = 0; p < batch.count; ++p) {
           F[first + p] = batch.deformation_gradient(p);
           const double J = F[first + p].determinant();

@@ -110,20 +110,34 @@ TEST(KernelArrays, LargeOnesSitOnWholeHugePagesAskedForAsSuch) {
 TEST(GradientRows, SlotsFollowTheRowsFirstUseAndEntriesStillNameTheirNodes) {
   // 9 nodes (8 is the padding node); rows name 5, 2, then 2, 7, 1, then nothing, then 7; 0, 3, 4 and 6 are unused.
   const std::vector<std::vector<Index>> supports = {{5, 2}, {2, 7, 1}, {}, {7}};
-  GradientRows rows;
-  rows.assign(supports, 8, RowPrecision::double_precision);
-  const std::vector<Index> expected_slot = {4, 3, 1, 5, 6, 0, 7, 2, 8};
-  for (Index node = 0; node <= 8; ++node) {
-    EXPECT_EQ(rows.slot(node), expected_slot[static_cast<std::size_t>(node)]) << "node " << node;
-    EXPECT_EQ(rows.node_at_slot(rows.slot(node)), node);
-  }
-  for (Index r = 0; r < rows.rows(); ++r)
-    for (int k = 0; k < rows.size(r); ++k) {
-      EXPECT_EQ(rows.node(r, k), supports[static_cast<std::size_t>(r)][static_cast<std::size_t>(k)]);
-      EXPECT_EQ(rows.block_records(rows.block_begin(r))[k], 4 * rows.slot(rows.node(r, k)));
+  for (const RowPrecision precision : {RowPrecision::double_precision, RowPrecision::single_precision}) {
+    SCOPED_TRACE(precision == RowPrecision::single_precision ? "single" : "double");
+    GradientRows rows;
+    rows.assign(supports, 8, precision);
+    // Entry k of row r in its block's records, as the kernel reads it.
+    auto record = [&](Index r, int k) {
+      const std::int64_t block = rows.block_begin(r) + k / GradientRows::kBlock;
+      return precision == RowPrecision::single_precision ? rows.block<float>(block)->records[k % GradientRows::kBlock]
+                                                         : rows.block<double>(block)->records[k % GradientRows::kBlock];
+    };
+    const std::vector<Index> expected_slot = {4, 3, 1, 5, 6, 0, 7, 2, 8};
+    for (Index node = 0; node <= 8; ++node) {
+      EXPECT_EQ(rows.slot(node), expected_slot[static_cast<std::size_t>(node)]) << "node " << node;
+      EXPECT_EQ(rows.node_at_slot(rows.slot(node)), node);
     }
-  // The padding entries of a row's last block point at the padding node's own slot.
-  EXPECT_EQ(rows.block_records(rows.block_begin(1))[3], 4 * 8);
+    for (Index r = 0; r < rows.rows(); ++r)
+      for (int k = 0; k < rows.size(r); ++k) {
+        EXPECT_EQ(rows.node(r, k), supports[static_cast<std::size_t>(r)][static_cast<std::size_t>(k)]);
+        EXPECT_EQ(record(r, k), 4 * rows.slot(rows.node(r, k)));
+      }
+    // The padding entries of a row's last block point at the padding node's own slot.
+    EXPECT_EQ(record(1, 3), 4 * 8);
+  }
+  // A single-precision block is one cache line, and the array starts on one.
+  GradientRows single;
+  single.assign(supports, 8, RowPrecision::single_precision);
+  EXPECT_EQ(sizeof(RowBlock<float>), 64u);
+  EXPECT_EQ(reinterpret_cast<std::uintptr_t>(single.block<float>(0)) % 64, 0u);
 }
 
 // One component at a time and not inlined: GCC 12 at -O3 vectorised the three conversions of an inlined version and
