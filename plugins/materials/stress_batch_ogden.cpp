@@ -3,7 +3,7 @@
 //   S_i = (a + b' J^(-alpha/3) lambda_i^alpha) / lambda_i^2,  b' = 2 mu / alpha,
 //   a = (2/D) J (J - 1) - b' sum_j J^(-alpha/3) lambda_j^alpha / 3,
 // with the powers as exp((alpha/2) (log lambda_i^2 - (2/3) log J)): one log per stretch and one exp instead of
-// a pow and a cube root.
+// a pow and a cube root, and log J = (1/2) sum_i log lambda_i^2.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "stress_batch_ogden.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -23,13 +23,18 @@ void OgdenStressBatch(const hyperelastic::OgdenConstants& k, StressBatch& batch)
     const Mat3V F = load_matrix(d, batch.F, p);
     const DoubleVec J = determinant(F);
     const DoubleMask ok = admissible(d, F, J);
-    const DoubleVec safe_J = hn::IfThenElse(ok, J, hn::Set(d, 1.0));  // no log of J <= 0 in refused lanes
+    const DoubleVec safe_J = hn::IfThenElse(ok, J, hn::Set(d, 1.0));  // refused lanes: a finite stand-in
     const SymmetricEigen3V principal = symmetric_eigen3(d, right_cauchy_green(F));
-    const DoubleVec log_J = hn::Log(d, safe_J);
+    // A round-off eigenvalue <= 0 gives NaN here and a refused lane below, as in the one-point code.
+    DoubleVec log_stretch_squared[3];
+    for (int i = 0; i < 3; ++i) log_stretch_squared[i] = hn::Log(d, principal.values[i]);
+    // log J from the same logs (J^2 = det C, the eigenvalues' product): one log fewer, and the isochoric stretches'
+    // product is 1 to round-off.
+    const DoubleVec log_J =
+        hn::Mul(hn::Set(d, 0.5), hn::Add(hn::Add(log_stretch_squared[0], log_stretch_squared[1]), log_stretch_squared[2]));
     DoubleVec isochoric[3], sum = hn::Zero(d);
     for (int i = 0; i < 3; ++i) {
-      // A round-off eigenvalue <= 0 gives NaN here and a refused lane below, as in the one-point code.
-      isochoric[i] = hn::Exp(d, hn::Mul(half_alpha, hn::NegMulAdd(two_thirds, log_J, hn::Log(d, principal.values[i]))));
+      isochoric[i] = hn::Exp(d, hn::Mul(half_alpha, hn::NegMulAdd(two_thirds, log_J, log_stretch_squared[i])));
       sum = hn::Add(sum, isochoric[i]);
     }
     const DoubleVec J_dU_dJ = hn::Mul(hn::Mul(hn::Set(d, k.two_over_D), safe_J), hn::Sub(safe_J, hn::Set(d, 1.0)));
