@@ -43,11 +43,6 @@ void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index
   });
 }
 
-Index GradientRows::record(std::size_t position) const {
-  return with_arrays(
-      [&](const auto& blocks, const auto&) { return blocks[position / kBlock].records[position % kBlock]; });
-}
-
 void GradientRows::set_gradient(Index row, int k, const Vec3& gradient) {
   const std::size_t p = position(row, k);
   with_arrays([&](auto& blocks, auto&) {

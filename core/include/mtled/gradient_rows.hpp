@@ -75,7 +75,11 @@ class GradientRows {
 
  private:
   std::size_t position(Index row, int k) const { return static_cast<std::size_t>(kBlock * block_offsets_[row] + k); }
-  Index record(std::size_t position) const;
+  Index record(std::size_t position) const {
+    const std::size_t block = position / kBlock, k = position % kBlock;
+    return precision_ == RowPrecision::single_precision ? single_blocks_[block].records[k]
+                                                        : double_blocks_[block].records[k];
+  }
   // Where component c of entry `position` sits in the test gradients (3 x kBlock per block).
   static std::size_t test_index(std::size_t position, int c) {
     return 3 * kBlock * (position / kBlock) + static_cast<std::size_t>(c * kBlock) + position % kBlock;
