@@ -30,8 +30,8 @@ void OgdenStressBatch(const hyperelastic::OgdenConstants& k, StressBatch& batch)
     for (int i = 0; i < 3; ++i) log_stretch_squared[i] = hn::Log(d, principal.values[i]);
     // log J from the same logs (J^2 = det C, the eigenvalues' product): one log fewer, and the isochoric stretches'
     // product is 1 to round-off.
-    const DoubleVec log_J =
-        hn::Mul(hn::Set(d, 0.5), hn::Add(hn::Add(log_stretch_squared[0], log_stretch_squared[1]), log_stretch_squared[2]));
+    const DoubleVec log_J = hn::Mul(
+        hn::Set(d, 0.5), hn::Add(hn::Add(log_stretch_squared[0], log_stretch_squared[1]), log_stretch_squared[2]));
     DoubleVec isochoric[3], sum = hn::Zero(d);
     for (int i = 0; i < 3; ++i) {
       isochoric[i] = hn::Exp(d, hn::Mul(half_alpha, hn::NegMulAdd(two_thirds, log_J, log_stretch_squared[i])));
