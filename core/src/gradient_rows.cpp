@@ -32,14 +32,22 @@ void GradientRows::assign(const std::vector<std::vector<Index>>& supports, Index
   slot_of_node_[static_cast<std::size_t>(padding_node)] = padding_node;
   node_of_slot_.push_back(padding_node);
   with_arrays([&](auto& blocks, auto& tests) {
-    blocks.assign(static_cast<std::size_t>(this->blocks()), {});
+    blocks.clear();
+    blocks.resize(static_cast<std::size_t>(this->blocks()));  // unwritten: every block is written below
     tests.clear();
-    for (auto& block : blocks) std::fill(std::begin(block.records), std::end(block.records), 4 * padding_node);
-    for (std::size_t r = 0; r < supports.size(); ++r)
+    const auto rows = static_cast<std::int64_t>(supports.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t r = 0; r < rows; ++r) {
+      for (std::int64_t b = block_offsets_[r]; b < block_offsets_[r + 1]; ++b) {
+        auto& block = blocks[static_cast<std::size_t>(b)];
+        for (auto& component : block.gradients) std::fill(std::begin(component), std::end(component), 0);
+        std::fill(std::begin(block.records), std::end(block.records), 4 * padding_node);
+      }
       for (std::size_t k = 0; k < supports[r].size(); ++k) {
         const std::size_t p = position(static_cast<Index>(r), static_cast<int>(k));
         blocks[p / kBlock].records[p % kBlock] = 4 * slot(supports[r][k]);
       }
+    }
   });
 }
 
@@ -64,8 +72,10 @@ void GradientRows::set_test_gradient(Index row, int k, const Vec3& gradient) {
   const std::size_t p = position(row, k);
   with_arrays([&](const auto& blocks, auto& tests) {
     if (tests.empty()) {  // a copy of the gradients first
-      tests.resize(3 * kBlock * blocks.size());
-      for (std::size_t b = 0; b < blocks.size(); ++b)
+      tests.resize(3 * kBlock * blocks.size());  // unwritten: the copy writes every element
+      const auto count = static_cast<std::int64_t>(blocks.size());
+#pragma omp parallel for schedule(static)
+      for (std::int64_t b = 0; b < count; ++b)
         for (int c = 0; c < 3; ++c)
           std::copy_n(blocks[b].gradients[c], kBlock,
                       tests.begin() + static_cast<std::ptrdiff_t>(test_index(kBlock * b, c)));

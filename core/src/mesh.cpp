@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <unordered_map>
 
 namespace mtled {
 
@@ -108,61 +107,85 @@ std::string describe_tet(const TetMesh& mesh, Index t) {
                      t + 1, centroid[0], centroid[1], centroid[2]);
 }
 
+// One tet's use of a face: the face's vertices sorted (its key), the tet, which of its faces (kTetFaces) it is, and
+// whether the tet's outward order of them is an even permutation of the sorted one.
+struct FaceUse {
+  std::array<Index, 3> face;
+  Index tet;
+  int which;
+  bool even;
+};
+// With positive volume (b-a).((c-a)x(d-a)) > 0, these vertex orders give outward normals.
+constexpr int kTetFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+
+// visit(first, last) for each face of the mesh with the tets that use it, in order of the sorted vertices, the uses in
+// tet order. The uses are bucketed by their smallest vertex (a counting sort: two passes over the tets) and sorted
+// within each bucket: linear in the mesh, where one sort of all 4 x tets uses, or a hash table, is not.
+template <class Visit>
+void for_each_face(const TetMesh& mesh, Visit visit) {
+  auto use = [](const std::array<Index, 4>& tet, int which, Index t) {
+    const int(&f)[3] = kTetFaces[which];
+    FaceUse u{{tet[f[0]], tet[f[1]], tet[f[2]]}, t, which, true};
+    for (const auto& [a, b] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{0, 1}}) {  // a bubble sort's swaps
+      if (u.face[a] > u.face[b]) {
+        std::swap(u.face[a], u.face[b]);
+        u.even = !u.even;
+      }
+    }
+    return u;
+  };
+  std::vector<std::int64_t> bucket(mesh.points.size() + 1, 0);
+  for (const auto& tet : mesh.tets)
+    for (const auto& f : kTetFaces) ++bucket[static_cast<std::size_t>(std::min({tet[f[0]], tet[f[1]], tet[f[2]]})) + 1];
+  for (std::size_t v = 0; v < mesh.points.size(); ++v) bucket[v + 1] += bucket[v];
+  std::vector<FaceUse> uses(static_cast<std::size_t>(bucket.back()));
+  std::vector<std::int64_t> next(bucket.begin(), bucket.end() - 1);
+  for (Index t = 0; t < mesh.tet_count(); ++t)
+    for (int which = 0; which < 4; ++which) {
+      const FaceUse u = use(mesh.tets[static_cast<std::size_t>(t)], which, t);
+      uses[static_cast<std::size_t>(next[static_cast<std::size_t>(u.face[0])]++)] = u;
+    }
+  auto order = [](const FaceUse& a, const FaceUse& b) { return a.face != b.face ? a.face < b.face : a.tet < b.tet; };
+  for (std::size_t v = 0; v < mesh.points.size(); ++v) {
+    const auto first = uses.begin() + bucket[v], last = uses.begin() + bucket[v + 1];
+    std::sort(first, last, order);
+    for (auto group = first; group != last;) {
+      auto end = group + 1;
+      while (end != last && end->face == group->face) ++end;
+      visit(group, end);
+      group = end;
+    }
+  }
+}
+
 // With every tet right-handed, an interior face is seen with opposite orientations from its two tets. Two
 // tets on the same side of their shared face overlap: one of them was inverted (a node moved through the
 // opposite face) and merely re-ordering its nodes would hide a folded mesh. A face shared by more than two
 // tets is overlapping material as well.
 void check_no_overlaps(const TetMesh& mesh) {
-  struct FaceUse {
-    std::array<Index, 3> face;  // sorted vertices
-    Index tet;
-    bool even;  // orientation of the outward face relative to its sorted vertices
-  };
-  static constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  std::vector<FaceUse> uses;
-  uses.reserve(4 * mesh.tets.size());
-  for (Index t = 0; t < mesh.tet_count(); ++t) {
-    const auto& tet = mesh.tets[static_cast<std::size_t>(t)];
-    for (const auto& f : kFaces) {
-      std::array<Index, 3> v{tet[f[0]], tet[f[1]], tet[f[2]]};
-      bool even = true;  // parity of the sort: a 3-element bubble sort's swaps
-      for (const auto& [a, b] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{0, 1}}) {
-        if (v[a] > v[b]) {
-          std::swap(v[a], v[b]);
-          even = !even;
-        }
-      }
-      uses.push_back({v, t, even});
-    }
-  }
-  std::sort(uses.begin(), uses.end(),
-            [](const FaceUse& a, const FaceUse& b) { return a.face != b.face ? a.face < b.face : a.tet < b.tet; });
   std::vector<Problem> problems;
   std::size_t overlaps = 0;
-  for (std::size_t i = 0; i < uses.size();) {
-    std::size_t j = i + 1;
-    while (j < uses.size() && uses[j].face == uses[i].face) ++j;
-    const std::size_t count = j - i;
-    const bool fine = count == 1 || (count == 2 && uses[i].even != uses[i + 1].even);
-    if (!fine && ++overlaps <= 5) {
-      const auto& face = uses[i].face;
-      const Vec3 centre = (mesh.points[face[0]] + mesh.points[face[1]] + mesh.points[face[2]]) / 3.0;
-      if (count == 2) {
-        problems.push_back({mesh.source, fmt::format("{} and {} lie on the same side of their shared face (centre at "
-                                                     "({:.6g}, {:.6g}, {:.6g}) m): one of them is inverted (a node "
-                                                     "moved through the opposite face) or the two overlap; fix the "
-                                                     "node or re-mesh",
-                                                     describe_tet(mesh, uses[i].tet), describe_tet(mesh, uses[i + 1].tet),
-                                                     centre[0], centre[1], centre[2])});
-      } else {
-        problems.push_back({mesh.source, fmt::format("{} tets share the face centred at ({:.6g}, {:.6g}, {:.6g}) m (at "
-                                                     "most two can): the mesh has overlapping or repeated tets, "
-                                                     "starting with {}; re-mesh",
-                                                     count, centre[0], centre[1], centre[2], describe_tet(mesh, uses[i].tet))});
-      }
+  for_each_face(mesh, [&](auto first, auto last) {
+    const auto count = last - first;
+    const bool fine = count == 1 || (count == 2 && first->even != (first + 1)->even);
+    if (fine || ++overlaps > 5) return;
+    const auto& face = first->face;
+    const Vec3 centre = (mesh.points[face[0]] + mesh.points[face[1]] + mesh.points[face[2]]) / 3.0;
+    if (count == 2) {
+      problems.push_back({mesh.source, fmt::format("{} and {} lie on the same side of their shared face (centre at "
+                                                   "({:.6g}, {:.6g}, {:.6g}) m): one of them is inverted (a node "
+                                                   "moved through the opposite face) or the two overlap; fix the "
+                                                   "node or re-mesh",
+                                                   describe_tet(mesh, first->tet), describe_tet(mesh, (first + 1)->tet),
+                                                   centre[0], centre[1], centre[2])});
+    } else {
+      problems.push_back(
+          {mesh.source, fmt::format("{} tets share the face centred at ({:.6g}, {:.6g}, {:.6g}) m (at "
+                                    "most two can): the mesh has overlapping or repeated tets, "
+                                    "starting with {}; re-mesh",
+                                    count, centre[0], centre[1], centre[2], describe_tet(mesh, first->tet))});
     }
-    i = j;
-  }
+  });
   if (overlaps > 5) problems.push_back({mesh.source, fmt::format("... {} such faces in all", overlaps)});
   if (!problems.empty()) throw InputError(std::move(problems));
 }
@@ -219,41 +242,17 @@ void check_mesh(TetMesh& mesh, bool fix_orientation, bool allow_overlaps) {
 }
 
 std::vector<std::array<Index, 3>> boundary_faces(const TetMesh& mesh) {
-  // A face is on the boundary when exactly one tet uses it. Faces are keyed by their sorted vertices; the
-  // kept copy remembers its orientation in its tet.
-  struct Key {
-    Index a, b, c;
-    bool operator==(const Key& o) const { return a == o.a && b == o.b && c == o.c; }
-  };
-  struct Hash {
-    std::size_t operator()(const Key& k) const {
-      return (static_cast<std::size_t>(k.a) * 73856093u) ^ (static_cast<std::size_t>(k.b) * 19349663u) ^
-             (static_cast<std::size_t>(k.c) * 83492791u);
-    }
-  };
-  struct Seen {
-    int count;
-    std::array<Index, 3> oriented;
-  };
-  std::unordered_map<Key, Seen, Hash> faces;
-  faces.reserve(mesh.tets.size() * 3);
-  // With positive volume (b-a).((c-a)x(d-a)) > 0, these vertex orders give outward normals.
-  static constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
-  for (Index t = 0; t < mesh.tet_count(); ++t) {
-    const auto& tet = mesh.tets[t];
-    const bool flipped = tet_volume(mesh, t) < 0.0;
-    for (const auto& f : kFaces) {
-      std::array<Index, 3> oriented{tet[f[0]], tet[f[1]], tet[f[2]]};
-      if (flipped) std::swap(oriented[1], oriented[2]);
-      std::array<Index, 3> v = oriented;
-      std::sort(v.begin(), v.end());
-      auto [it, inserted] = faces.try_emplace(Key{v[0], v[1], v[2]}, Seen{0, oriented});
-      ++it->second.count;
-    }
-  }
+  // A face is on the boundary when exactly one tet uses it; it keeps that tet's outward order (reversed where the
+  // tet's volume is negative).
   std::vector<std::array<Index, 3>> boundary;
-  for (const auto& [key, seen] : faces)
-    if (seen.count == 1) boundary.push_back(seen.oriented);
+  for_each_face(mesh, [&](auto first, auto last) {
+    if (last - first != 1) return;
+    const auto& tet = mesh.tets[static_cast<std::size_t>(first->tet)];
+    const int(&f)[3] = kTetFaces[first->which];
+    std::array<Index, 3> oriented{tet[f[0]], tet[f[1]], tet[f[2]]};
+    if (tet_volume(mesh, first->tet) < 0.0) std::swap(oriented[1], oriented[2]);
+    boundary.push_back(oriented);
+  });
   std::sort(boundary.begin(), boundary.end());  // a deterministic order
   return boundary;
 }

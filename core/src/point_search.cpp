@@ -30,7 +30,9 @@ PointSearch::PointSearch(std::span<const Vec3> points) : tree_(std::make_unique<
 PointSearch::~PointSearch() = default;
 
 void PointSearch::within(const Vec3& x, double radius, std::vector<Index>& out) const {
-  std::vector<std::pair<std::uint32_t, double>> matches;
+  // One buffer per thread, kept between calls: setup asks once per integration point and node, and a fresh vector
+  // grew by reallocation to each support's size every time.
+  thread_local std::vector<std::pair<std::uint32_t, double>> matches;
   tree_->index.radiusSearch(x.data(), radius * radius, matches, nanoflann::SearchParams(32, 0.0f, false));
   out.clear();
   out.reserve(matches.size());

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "mtled/mesh.hpp"
 #include "test_support.hpp"
 
@@ -37,6 +39,24 @@ TEST(Mesh, BoundaryFacesPointOutwardAndCloseTheSurface) {
   }
   EXPECT_LT(sum.norm(), 1e-12);  // a closed surface
   EXPECT_NEAR(area, 2.0 * (1 * 2 + 2 * 3 + 1 * 3), 1e-12);
+}
+
+TEST(Mesh, BoundaryFacesOfInvertedTetsStillPointOutward) {
+  // Every third tet's vertex order reversed (negative volume, as some files write them): the same faces, the same
+  // outward order.
+  const TetMesh mesh = test::box_mesh(Vec3(1, 2, 3), 3, 2, 4);
+  TetMesh mixed = mesh;
+  int reversed = 0;
+  for (std::size_t t = 0; t < mixed.tets.size(); t += 3, ++reversed) std::swap(mixed.tets[t][0], mixed.tets[t][1]);
+  ASSERT_GT(reversed, 0);
+  ASSERT_LT(tet_volume(mixed, 0), 0.0);
+  // Each face rotated to start at its smallest vertex (a rotation keeps the orientation), then sorted.
+  auto normalised = [](std::vector<std::array<Index, 3>> faces) {
+    for (auto& f : faces) std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
+    std::sort(faces.begin(), faces.end());
+    return faces;
+  };
+  EXPECT_EQ(normalised(boundary_faces(mixed)), normalised(boundary_faces(mesh)));
 }
 
 TEST(Mesh, MeanEdgeLengthOfAUniformGrid) {

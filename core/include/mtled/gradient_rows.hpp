@@ -103,10 +103,11 @@ class GradientRows {
   std::vector<int> sizes_;
   std::int64_t entries_ = 0;
   std::vector<Index> slot_of_node_, node_of_slot_;  // both padding_node + 1 long
-  AlignedVector<RowBlock<double>> double_blocks_;   // the one the precision names is filled
-  AlignedVector<RowBlock<float>> single_blocks_;
-  AlignedVector<double> double_tests_;  // empty until a test gradient is set
-  AlignedVector<float> single_tests_;
+  // Written in parallel after each resize (assign, set_test_gradient): UnfilledVector.
+  UnfilledVector<RowBlock<double>> double_blocks_;  // the one the precision names is filled
+  UnfilledVector<RowBlock<float>> single_blocks_;
+  UnfilledVector<double> double_tests_;  // empty until a test gradient is set
+  UnfilledVector<float> single_tests_;
 };
 
 template <>

@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <new>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -38,5 +39,29 @@ struct CacheLineAllocator {
 };
 template <class T>
 using AlignedVector = std::vector<T, CacheLineAllocator<T>>;
+
+// A CacheLineAllocator whose resize() leaves trivial elements unwritten: for arrays whose owner then writes every
+// element itself, in parallel, so that the pages are first touched (mapped and cleared by the operating system) by
+// all threads at once rather than by a serial zero-fill before them.
+template <class T>
+struct UnfilledAllocator : CacheLineAllocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UnfilledAllocator<U>;
+  };
+  UnfilledAllocator() = default;
+  template <class U>
+  UnfilledAllocator(const UnfilledAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+    ::new (static_cast<void*>(p)) U;  // default-initialised: no write for trivial types
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <class T>
+using UnfilledVector = std::vector<T, UnfilledAllocator<T>>;
 
 }  // namespace mtled
