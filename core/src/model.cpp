@@ -433,12 +433,15 @@ std::vector<Vec3> Model::solve_integration_correction(std::vector<Vec3> r) const
     }
   // w_p mean_p(x) per point, then summed per node: the weight goes in with the mean, so the second pass reads
   // one array at the scattered points instead of two.
-  std::vector<Vec3> weighted_mean(static_cast<std::size_t>(points));
+  // x by the kernel's slots (GradientRows::slot) for the first pass: the rows' records name slots, which follow the
+  // rows' order of first use, so the pass reads x nearly in order and without a slot-to-node lookup per entry.
+  std::vector<Vec3> weighted_mean(static_cast<std::size_t>(points)), x_at_slot(static_cast<std::size_t>(n));
   const auto apply = [&](const std::vector<Vec3>& x, std::vector<Vec3>& y) {
+    for (Index i = 0; i < n; ++i) x_at_slot[static_cast<std::size_t>(ip_rows_.slot(i))] = x[i];
 #pragma omp parallel for schedule(static)
     for (Index ip = 0; ip < points; ++ip) {
       Vec3 sum = Vec3::Zero();
-      for (int k = 0; k < ip_rows_.size(ip); ++k) sum += x[ip_rows_.node(ip, k)];
+      for (int k = 0; k < ip_rows_.size(ip); ++k) sum += x_at_slot[ip_rows_.entry_slot(ip, k)];
       weighted_mean[ip] = (ip_weight_[ip] / ip_rows_.size(ip)) * sum;
     }
 #pragma omp parallel for schedule(static)

@@ -1,10 +1,10 @@
 #include "moving_least_squares.hpp"
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace mtled::shapefunctions {
 
@@ -79,13 +79,21 @@ template <int M>
 ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
                      std::span<double> values, std::span<Vec3> gradients) {
   const std::size_t n = nodes.size();
+  // Each node's weight and (below) basis vector, computed once and kept for the passes that follow (one buffer per
+  // thread, reused from point to point).
+  struct NodeTerms {
+    NodeWeight weight;
+    BasisVector<M> p;
+  };
+  thread_local std::vector<NodeTerms> terms;
+  terms.resize(n);
   // The scale s is the weight-averaged support radius: close to the support size, so the scaled coordinates
   // of the nodes that count are O(1) and A is well scaled whatever the units and position; and smooth in x,
   // because entering and leaving nodes carry zero weight, so the MMLS penalty (which depends on s) is too.
   double total_weight = 0.0, weighted_radius = 0.0;
   Vec3 total_weight_gradient = Vec3::Zero(), weighted_radius_gradient = Vec3::Zero();
   for (std::size_t i = 0; i < n; ++i) {
-    const NodeWeight weight = quartic_spline(nodes[i] - x, radii[i]);
+    const NodeWeight& weight = terms[i].weight = quartic_spline(nodes[i] - x, radii[i]);
     total_weight += weight.w;
     weighted_radius += weight.w * radii[i];
     total_weight_gradient += weight.gradient;
@@ -102,11 +110,9 @@ ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes,
 
   MomentMatrix<M> moment = MomentMatrix<M>::Zero();
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 offset = nodes[i] - x;
-    const NodeWeight weight = quartic_spline(offset, radii[i]);
-    if (weight.w == 0.0) continue;
-    const BasisVector<M> p = basis_at<M>(inverse_scale * offset);
-    moment.noalias() += weight.w * p * p.transpose();
+    if (terms[i].weight.w == 0.0) continue;
+    const BasisVector<M>& p = terms[i].p = basis_at<M>(inverse_scale * (nodes[i] - x));
+    moment.noalias() += terms[i].weight.w * p * p.transpose();
   }
   if constexpr (M > 4) moment.diagonal().template tail<M - 4>().array() += mu;
 
@@ -124,11 +130,9 @@ ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes,
     rhs.template block<3, 3>(1, 0).diagonal().setConstant(inverse_scale);
     // A_k c without forming A_k: sum_I w_I,k p_I (p_I . c) + mu_k D c.
     for (std::size_t i = 0; i < n; ++i) {
-      const Vec3 offset = nodes[i] - x;
-      const NodeWeight weight = quartic_spline(offset, radii[i]);
-      if (weight.w == 0.0) continue;
-      const BasisVector<M> p = basis_at<M>(inverse_scale * offset);
-      rhs.noalias() -= (p.dot(c) * p) * weight.gradient.transpose();
+      if (terms[i].weight.w == 0.0) continue;
+      const BasisVector<M>& p = terms[i].p;
+      rhs.noalias() -= (p.dot(c) * p) * terms[i].weight.gradient.transpose();
     }
     if constexpr (M > 4) rhs.noalias() -= quadratic_part<M>(c) * mu_gradient.transpose();
     gamma = factor.solve(rhs);
@@ -136,10 +140,9 @@ ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes,
 
   bool finite = true;
   for (std::size_t i = 0; i < n; ++i) {
-    const Vec3 offset = nodes[i] - x;
-    const NodeWeight weight = quartic_spline(offset, radii[i]);
+    const NodeWeight& weight = terms[i].weight;
     if (weight.w == 0.0) continue;
-    const BasisVector<M> p = basis_at<M>(inverse_scale * offset);
+    const BasisVector<M>& p = terms[i].p;
     const double cp = c.dot(p);
     values[i] = weight.w * cp;
     finite = finite && std::isfinite(values[i]);
