@@ -39,9 +39,15 @@ void OgdenStressBatch(const hyperelastic::OgdenConstants& k, StressBatch& batch)
     }
     const DoubleVec J_dU_dJ = hn::Mul(hn::Mul(hn::Set(d, k.two_over_D), safe_J), hn::Sub(safe_J, hn::Set(d, 1.0)));
     const DoubleVec a = hn::NegMulAdd(stress_factor, hn::Mul(sum, third), J_dU_dJ);
+    // 1 / lambda_i^2 from one division: the other two eigenvalues over their product with it (the divider is the
+    // batch's narrowest unit).
+    const DoubleVec* l = principal.values;
+    const DoubleVec inverse_product = hn::Div(hn::Set(d, 1.0), hn::Mul(hn::Mul(l[0], l[1]), l[2]));
+    const DoubleVec inverse[3] = {hn::Mul(hn::Mul(l[1], l[2]), inverse_product),
+                                  hn::Mul(hn::Mul(l[0], l[2]), inverse_product),
+                                  hn::Mul(hn::Mul(l[0], l[1]), inverse_product)};
     DoubleVec principal_stress[3];
-    for (int i = 0; i < 3; ++i)
-      principal_stress[i] = hn::Div(hn::MulAdd(stress_factor, isochoric[i], a), principal.values[i]);
+    for (int i = 0; i < 3; ++i) principal_stress[i] = hn::Mul(hn::MulAdd(stress_factor, isochoric[i], a), inverse[i]);
     store_stress(d, spectral_sum(principal, principal_stress), ok, batch, p);
   }
 }
