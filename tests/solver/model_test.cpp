@@ -139,6 +139,31 @@ TEST(GradientRows, SlotsFollowTheRowsFirstUseAndEntriesStillNameTheirNodes) {
   }
 }
 
+TEST(GradientRows, AssignedAgainEveryEntryStartsAtZeroWithPaddingOnThePaddingNode) {
+  // The rows' arrays are resized without a zero-fill (UnfilledVector) and written in parallel by assign: a second
+  // assign into the memory of a first, whose gradients were set, must still start every entry, padding included,
+  // at zero, and the padding entries on the padding node.
+  for (const RowPrecision precision : {RowPrecision::double_precision, RowPrecision::single_precision}) {
+    SCOPED_TRACE(precision == RowPrecision::single_precision ? "single" : "double");
+    GradientRows rows;
+    rows.assign({{0, 1, 2, 3, 4}, {1, 2}}, 5, precision);
+    for (Index r = 0; r < rows.rows(); ++r)
+      for (int k = 0; k < rows.size(r); ++k) rows.set_gradient(r, k, Vec3(1.0, 2.0, 3.0));
+    rows.set_test_gradient(0, 0, Vec3(4.0, 5.0, 6.0));
+    rows.assign({{3}, {0, 4, 2}}, 5, precision);
+    EXPECT_FALSE(rows.has_own_test_gradients());
+    for (Index r = 0; r < rows.rows(); ++r) {
+      const int padded = static_cast<int>(GradientRows::kBlock * (rows.block_end(r) - rows.block_begin(r)));
+      for (int k = 0; k < padded; ++k) {
+        EXPECT_EQ(rows.gradient(r, k), Vec3::Zero()) << "row " << r << " entry " << k;
+        if (k >= rows.size(r)) {
+          EXPECT_EQ(rows.node(r, k), 5) << "row " << r << " padding entry " << k;
+        }
+      }
+    }
+  }
+}
+
 // One component at a time and not inlined: GCC 12 at -O3 vectorised the three conversions of an inlined version and
 // left the first two components unrounded (the double -> float -> double round trip of a pair dropped).
 [[gnu::noinline]] double rounded_to_float(double x) { return static_cast<float>(x); }
