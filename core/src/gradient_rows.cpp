@@ -68,18 +68,23 @@ Vec3 GradientRows::gradient(Index row, int k) const {
 }
 
 // The test gradients: 3 x kBlock per block, the x, then the y, then the z components of its entries.
+void GradientRows::own_test_gradients() {
+  with_arrays([&](const auto& blocks, auto& tests) {
+    if (!tests.empty()) return;
+    tests.resize(3 * kBlock * blocks.size());  // unwritten: the copy writes every element
+    const auto count = static_cast<std::int64_t>(blocks.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t b = 0; b < count; ++b)
+      for (int c = 0; c < 3; ++c)
+        std::copy_n(blocks[b].gradients[c], kBlock,
+                    tests.begin() + static_cast<std::ptrdiff_t>(test_index(kBlock * b, c)));
+  });
+}
+
 void GradientRows::set_test_gradient(Index row, int k, const Vec3& gradient) {
+  own_test_gradients();
   const std::size_t p = position(row, k);
   with_arrays([&](const auto& blocks, auto& tests) {
-    if (tests.empty()) {  // a copy of the gradients first
-      tests.resize(3 * kBlock * blocks.size());  // unwritten: the copy writes every element
-      const auto count = static_cast<std::int64_t>(blocks.size());
-#pragma omp parallel for schedule(static)
-      for (std::int64_t b = 0; b < count; ++b)
-        for (int c = 0; c < 3; ++c)
-          std::copy_n(blocks[b].gradients[c], kBlock,
-                      tests.begin() + static_cast<std::ptrdiff_t>(test_index(kBlock * b, c)));
-    }
     for (int c = 0; c < 3; ++c) tests[test_index(p, c)] = static_cast<real_of<decltype(blocks)>>(gradient[c]);
   });
 }

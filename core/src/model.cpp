@@ -324,9 +324,7 @@ void Model::build_integration_correction() {
   // 28 bytes per entry, as many as double rows without them). Double rows leave the kernel to form them: a stored
   // copy would bring them to 52 bytes per entry, and the brain phantom's kernel took 43% longer (performance.md).
   if (ip_rows_.precision() != RowPrecision::single_precision) return;
-  // The first set makes the rows' own copy of the gradients (GradientRows::set_test_gradient); after it the points
-  // write their own entries, in parallel.
-  ip_rows_.set_test_gradient(0, 0, test_gradient(0, 0));
+  ip_rows_.own_test_gradients();  // then each point writes its own entries, in parallel
 #pragma omp parallel for schedule(static)
   for (Index ip = 0; ip < integration_point_count(); ++ip)
     for (int k = 0; k < ip_rows_.size(ip); ++k)

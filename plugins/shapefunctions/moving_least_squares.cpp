@@ -1,6 +1,7 @@
 #include "moving_least_squares.hpp"
 
 #include <Eigen/Dense>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -79,8 +80,8 @@ template <int M>
 ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
                      std::span<double> values, std::span<Vec3> gradients) {
   const std::size_t n = nodes.size();
-  // Each node's weight and (below) basis vector, computed once and kept for the passes that follow (one buffer per
-  // thread, reused from point to point).
+  // Each node's weight and (below, only where the weight is not zero) basis vector, computed once and kept for the
+  // passes that follow (one buffer per thread, reused from point to point).
   struct NodeTerms {
     NodeWeight weight;
     BasisVector<M> p;

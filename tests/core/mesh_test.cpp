@@ -46,9 +46,7 @@ TEST(Mesh, BoundaryFacesOfInvertedTetsStillPointOutward) {
   // outward order.
   const TetMesh mesh = test::box_mesh(Vec3(1, 2, 3), 3, 2, 4);
   TetMesh mixed = mesh;
-  int reversed = 0;
-  for (std::size_t t = 0; t < mixed.tets.size(); t += 3, ++reversed) std::swap(mixed.tets[t][0], mixed.tets[t][1]);
-  ASSERT_GT(reversed, 0);
+  for (std::size_t t = 0; t < mixed.tets.size(); t += 3) std::swap(mixed.tets[t][0], mixed.tets[t][1]);
   ASSERT_LT(tet_volume(mixed, 0), 0.0);
   // Each face rotated to start at its smallest vertex (a rotation keeps the orientation), then sorted.
   auto normalised = [](std::vector<std::array<Index, 3>> faces) {

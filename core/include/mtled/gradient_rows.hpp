@@ -46,8 +46,11 @@ class GradientRows {
   void set_gradient(Index row, int k, const Vec3& gradient);
   // The test-function gradients the force kernel's scatter reads (the model's consistent integration: grad N_I + xi_I
   // - the mean of xi over the row), in the gradients' precision, 3 x kBlock per block (x, y, z; no records: the
-  // scatter reads those from the blocks). Until one is set they are the gradients themselves and take no memory; the
-  // first set_test_gradient copies the gradients, then overwrites an entry.
+  // scatter reads those from the blocks). Until own_test_gradients() they are the gradients themselves and take no
+  // memory; own_test_gradients() makes them a copy of the gradients (in parallel; nothing if already done), after
+  // which set_test_gradient overwrites one entry and may be called from several threads for distinct entries.
+  // set_test_gradient calls own_test_gradients() itself when needed.
+  void own_test_gradients();
   void set_test_gradient(Index row, int k, const Vec3& gradient);
 
   RowPrecision precision() const { return precision_; }

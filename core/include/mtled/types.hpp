@@ -45,20 +45,14 @@ using AlignedVector = std::vector<T, CacheLineAllocator<T>>;
 // all threads at once rather than by a serial zero-fill before them.
 template <class T>
 struct UnfilledAllocator : CacheLineAllocator<T> {
-  template <class U>
-  struct rebind {
-    using other = UnfilledAllocator<U>;
-  };
   UnfilledAllocator() = default;
   template <class U>
   UnfilledAllocator(const UnfilledAllocator<U>&) noexcept {}
+  // Value-initialisation (resize's) becomes default-initialisation: no write for trivial types. Construction with
+  // arguments is std::allocator_traits' own.
   template <class U>
   void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
-    ::new (static_cast<void*>(p)) U;  // default-initialised: no write for trivial types
-  }
-  template <class U, class... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    ::new (static_cast<void*>(p)) U;
   }
 };
 template <class T>
