@@ -1,9 +1,10 @@
 // `cuda`: the time step on an NVIDIA GPU. Everything precomputed in the reference configuration (the rows of both
 // force passes, the weights, the laws' constants, the masses) and the state (u_n, u_(n-1), the prediction, the
 // forces) stay on the device; a step is a few kernels (kernels.cu). Per step the host reads back the constraint
-// products' rows, the step's sums and, for the drivers, u_n (3 doubles per node), and sends the constraint
+// products' rows, the step's sums and, for the drivers, u_n at the nodes they read, and sends the constraint
 // multipliers; describe() counts those bytes. Laws: the ones whose Material::closed_form() the device knows (Ogden,
 // neo-Hookean); no volumetric treatment yet. Without a usable device the run stops at setup with exit 2.
+#include <algorithm>
 #include <chrono>
 #include <climits>
 #include <map>
@@ -154,11 +155,11 @@ class CudaBackend final : public StepEngine {
       v->resize(vector);
     mass_.resize(static_cast<std::size_t>(nodes_));
     staging_.resize(3 * static_cast<std::size_t>(nodes_));
+    read_list_.resize(static_cast<std::size_t>(nodes_));
     records_.resize(cuda::kRecord * (static_cast<std::size_t>(points_) + 1));  // and the zero sink record
     partials_.resize(6 * cuda::kReduceBlocks);
-    first_bad_.resize(1);
+    evaluation_.resize(1);
     first_non_finite_.resize(1);
-    increment_.resize(1);
     sums_.resize(1);
     host_u_.resize(3 * static_cast<std::size_t>(nodes_));
     host_u_previous_.resize(3 * static_cast<std::size_t>(nodes_));
@@ -208,18 +209,20 @@ class CudaBackend final : public StepEngine {
     return host_u_previous_.span();
   }
 
+  // The sums are queued behind the forces and read back with their inadmissible point in one copy.
   Index evaluate_forces(IncrementSums* sums) override {
     const ScopeTimer timed(engine_s_);
     f_.swap(f_previous_);
-    const Index bad = timed_forces(u_.data(), f_.data());
-    if (bad >= 0 || sums == nullptr) return bad;
-    cuda::increment_sums(nodes_, u_.data(), u_previous_.data(), f_.data(), f_previous_.data(), mass_.data(),
-                         partials_.data(), increment_.data(), stream_);
-    cuda::IncrementSumsDevice host{};
-    download(increment_.data(), &host, sizeof(host));
-    sums->stiffness = host.stiffness;
-    sums->inertia = host.inertia;
-    return bad;
+    queue_forces(u_.data(), f_.data());
+    if (sums != nullptr)
+      cuda::increment_sums(nodes_, u_.data(), u_previous_.data(), f_.data(), f_previous_.data(), mass_.data(),
+                           partials_.data(), &evaluation_.data()->sums, stream_);
+    const cuda::EvaluationDevice result = read_evaluation();
+    if (sums != nullptr) {
+      sums->stiffness = result.sums.stiffness;
+      sums->inertia = result.sums.inertia;
+    }
+    return first_bad(result);
   }
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
@@ -276,9 +279,32 @@ class CudaBackend final : public StepEngine {
   Index internal_forces(std::span<const double> u, std::span<double> f) override {
     const ScopeTimer timed(engine_s_);
     to_device(u, scratch_u_.data());
-    const Index bad = timed_forces(scratch_u_.data(), scratch_f_.data());
+    queue_forces(scratch_u_.data(), scratch_f_.data());
+    const Index bad = first_bad(read_evaluation());
     from_device(scratch_f_.data(), f);
     return bad;
+  }
+
+  // The drivers read a few dozen nodes of u_n each step (the needle's neighbourhood): gathered on the device and
+  // copied back alone, 24 bytes a node, instead of all of u_n.
+  bool spreads_nodes() const override { return true; }
+  std::span<const double> displacement_at(std::span<const Index> nodes) override {
+    if (u_on_host_ || nodes.empty()) return host_u_.span();
+    const ScopeTimer timed(engine_s_);
+    const auto count = static_cast<std::int32_t>(nodes.size());
+    if (!std::equal(nodes.begin(), nodes.end(), nodes_read_.begin(), nodes_read_.end())) {
+      nodes_read_.assign(nodes.begin(), nodes.end());
+      upload(nodes_read_.data(), read_list_.data(), nodes.size_bytes());
+    }
+    cuda::gather(count, read_list_.data(), u_.data(), staging_.data(), stream_);
+    check(cudaGetLastError(), "launching the gather");
+    read_values_.resize(3 * nodes.size());
+    download(staging_.data(), read_values_.data(), read_values_.size() * sizeof(double));
+    const std::span<double> u = host_u_.span();
+    for (std::size_t k = 0; k < nodes.size(); ++k)
+      for (std::size_t c = 0; c < 3; ++c)
+        u[3 * static_cast<std::size_t>(nodes[k]) + c] = read_values_.data()[3 * k + c];
+    return u;
   }
 
  private:
@@ -341,19 +367,25 @@ class CudaBackend final : public StepEngine {
     return out;
   }
 
-  // The forces of u4 into f4, timed by events around the kernels; returns the first inadmissible point or -1.
-  Index timed_forces(const double* u4, double* f4) {
-    check(cudaMemsetAsync(first_bad_.data(), 0x7f, sizeof(int), stream_), "cudaMemsetAsync");
+  // Queues the forces of u4 into f4, timed by events around the kernels; read_evaluation() waits for them.
+  void queue_forces(const double* u4, double* f4) {
+    int* lowest_bad = &evaluation_.data()->first_bad;
+    check(cudaMemsetAsync(lowest_bad, 0x7f, sizeof(int), stream_), "cudaMemsetAsync");
     check(cudaEventRecord(start_, stream_), "cudaEventRecord");
-    rows_->forces(u4, f4, records_.data(), first_bad_.data(), stream_);
+    rows_->forces(u4, f4, records_.data(), lowest_bad, stream_);
     check(cudaEventRecord(stop_, stream_), "cudaEventRecord");
-    int first = 0;
-    download(first_bad_.data(), &first, sizeof(first));
+  }
+  cuda::EvaluationDevice read_evaluation() {
+    cuda::EvaluationDevice result{};
+    download(evaluation_.data(), &result, sizeof(result));
     float ms = 0.0f;
     check(cudaEventElapsedTime(&ms, start_, stop_), "cudaEventElapsedTime");
     kernel_ms_ += ms;
     ++evaluations_;
-    return first >= 0x7f7f7f7f ? -1 : first;
+    return result;
+  }
+  static Index first_bad(const cuda::EvaluationDevice& result) {
+    return result.first_bad >= 0x7f7f7f7f ? -1 : result.first_bad;
   }
 
   std::int64_t streamed_bytes() const {
@@ -429,11 +461,12 @@ class CudaBackend final : public StepEngine {
   std::unique_ptr<DeviceRows> rows_;
   DeviceBuffer<double> u_, u_previous_, prediction_, free_, f_, f_previous_, f_ext_, scratch_u_, scratch_f_;
   DeviceBuffer<double> mass_, records_, partials_, staging_;
-  DeviceBuffer<int> first_bad_;
+  DeviceBuffer<std::int32_t> read_list_;  // the nodes displacement_at last gathered
   DeviceBuffer<unsigned long long> first_non_finite_;
-  DeviceBuffer<cuda::IncrementSumsDevice> increment_;
+  DeviceBuffer<cuda::EvaluationDevice> evaluation_;
   DeviceBuffer<cuda::StepSumsDevice> sums_;
-  PinnedBuffer<double> host_u_, host_u_previous_;
+  PinnedBuffer<double> host_u_, host_u_previous_, read_values_;
+  std::vector<Index> nodes_read_;
   bool u_on_host_ = false, previous_on_host_ = false;
   std::map<const ConstraintBlock*, DeviceBlock> blocks_;
   long blocks_revision_ = -1;

@@ -54,7 +54,7 @@ struct NodePass {
   double* f4 = nullptr;
 };
 
-// f = f_int(u): both passes.
+// f = f_int(u): F at the points, their stresses, the nodes' sums (three launches on `stream`).
 template <class Real>
 void internal_forces(const PointPass<Real>& points, const NodePass<Real>& nodes, cudaStream_t stream);
 
@@ -67,6 +67,11 @@ void predict(std::int32_t nodes, const double* u4, const double* u_previous4, co
 // What the host reads back of the reductions (one copy per call).
 struct IncrementSumsDevice {
   double stiffness, inertia;
+};
+// A force evaluation's one read-back: its sums and its first inadmissible point (INT_MAX-ish 0x7f7f7f7f: none).
+struct EvaluationDevice {
+  IncrementSumsDevice sums;
+  int first_bad;
 };
 struct StepSumsDevice {
   double largest_increment, largest_displacement, projection_energy, kinetic_product, fastest_energy;
@@ -88,6 +93,8 @@ void step_sums(std::int32_t nodes, const double* prediction4, const double* free
 // Between the host's 3 doubles per node and the device's 4: v3 (contiguous, copied in one transfer) to or from v4.
 void pack(std::int32_t nodes, const double* v4, double* v3, cudaStream_t stream);
 void unpack(std::int32_t nodes, const double* v3, double* v4, cudaStream_t stream);
+// v3 = the 3 components of v4 at `nodes` (count of them), in list order.
+void gather(std::int32_t count, const std::int32_t* nodes, const double* v4, double* v3, cudaStream_t stream);
 
 // The constraint projection's two products for one block (ConstraintBlock, on the device): out = Phi v (rows x k,
 // the components interleaved) and v += M^-1 Phi^T y.

@@ -41,11 +41,11 @@ class StepEngine {
   virtual std::span<const double> displacement() = 0;
   virtual std::span<const double> previous_displacement() = 0;
   // u_n right at `nodes` at least (the drivers' reads), and at the nodes this process's forces read. An engine that
-  // spreads the nodes over processes brings just those; every process calls it with the same nodes. The default:
-  // displacement().
+  // spreads the nodes over processes, or keeps them on a device, brings just those; every process calls it with the
+  // same nodes. The default: displacement().
   virtual std::span<const double> displacement_at(std::span<const Index> nodes);
-  // Whether displacement_at brings only the nodes asked for (the nodes are spread over processes); where it does not
-  // (the default), the Simulation does not ask the drivers which nodes they read.
+  // Whether displacement_at brings only the nodes asked for (the nodes are spread over processes, or on a device);
+  // where it does not (the default), the Simulation does not ask the drivers which nodes they read.
   virtual bool spreads_nodes() const;
 
   // f_n = f_int(u_n), kept for predict(); with `sums`, IncrementSums too. Returns -1, or the lowest-numbered
