@@ -86,13 +86,14 @@ rows = [("default_cpu", None), ("default_gpu", "default_cpu"), ("default_gpu_sin
         ("brain200_cpu", None), ("brain200_gpu", "brain200_cpu"), ("brain_cpu", None),
         ("brain_gpu", None if full == "brain_gpu" else full), ("brain_gpu_single", full)]
 print("| run | exit | steps | setup s | solve s | wall s | M updates/s | force N | vs CPU: NRMSE, force | "
-      "GPU force kernel: ms, GB/s (of copy) | host<->GPU bytes/step; host time in GPU calls |")
-print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+      "GPU force kernel: ms, GB/s (of copy) | host<->GPU bytes/step; host time in GPU calls | "
+      "ms per step: force kernel, engine's other calls, host |")
+print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
 for name, reference in rows:
     s = summary(name)
     code = open(os.path.join(work, name + ".exit")).read().strip() if os.path.exists(os.path.join(work, name + ".exit")) else "-"
     if not s:
-        print(f"| {name} | {code} | | | | | | | | | |"); continue
+        print(f"| {name} | {code} | | | | | | | | | | |"); continue
     f = force(name, s)
     compared = ""
     if reference and summary(reference):
@@ -106,7 +107,15 @@ for name, reference in rows:
         kernel = f"{1e3 * b['force_kernel_s']:.3f}, {b['force_kernel_GB_per_s']:.0f}{share}"
     traffic = (f"{b['device_to_host_bytes_per_step']:.0f} down, {b['host_to_device_bytes_per_step']:.0f} up; "
                f"in the engine {b.get('engine_calls_s', 0):.1f} s") if b.get("type") == "cuda" else ""
+    # Where a step goes: the force kernel's time (events), the rest of the engine's calls (launches, copies, waits),
+    # and the host's work between them (the constraint solve, the drivers, the monitors).
+    per_step = ""
+    if b.get("type") == "cuda" and s.get("steps") and "force_kernel_s" in b:
+        steps, kernel_s = s["steps"], b["force_kernel_s"] * b.get("force_evaluations", 0)
+        engine_s = b.get("engine_calls_s", 0)
+        per_step = (f"{1e3 * kernel_s / steps:.3f}, {1e3 * (engine_s - kernel_s) / steps:.3f}, "
+                    f"{1e3 * (s.get('solve_time_s', 0) - engine_s) / steps:.3f}")
     print(f"| {name} | {code} | {s.get('steps')} | {s.get('setup_time_s', 0):.1f} | {s.get('solve_time_s', 0):.1f} | "
           f"{s.get('wall_time_s', 0):.1f} | {s.get('ip_updates_per_s', 0) / 1e6:.1f} | "
-          f"{f if f is None else f'{f:.6g}'} | {compared} | {kernel} | {traffic} |")
+          f"{f if f is None else f'{f:.6g}'} | {compared} | {kernel} | {traffic} | {per_step} |")
 PY
