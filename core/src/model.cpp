@@ -707,7 +707,7 @@ double Model::strain_energy(std::span<const double> u) const {
 void Model::interpolate(std::span<const double> u, std::span<double> out) const {
   // On the time step's team, not OpenMP: monitors and writers call this between steps (every 100 steps by default),
   // and OpenMP's idle threads would then spin for milliseconds on the cores the team needs for the next step.
-  constexpr std::int64_t kNodesWorthAThread = 1024;  // about 40 support entries each
+  constexpr std::int64_t kInterpolationGrain = 1024;  // nodes per thread at least (about 40 support entries each)
   team_->for_each_share(
       node_count(),
       [&](std::int64_t begin, std::int64_t end) {
@@ -716,7 +716,7 @@ void Model::interpolate(std::span<const double> u, std::span<double> out) const 
           for (int d = 0; d < 3; ++d) out[3 * static_cast<std::size_t>(j) + d] = v[d];
         }
       },
-      kNodesWorthAThread);
+      kInterpolationGrain);
 }
 
 Vec3 Model::interpolate_node(Index node, std::span<const double> u) const {
