@@ -155,6 +155,7 @@ class CudaBackend final : public StepEngine {
       v->resize(vector);
     mass_.resize(static_cast<std::size_t>(nodes_));
     staging_.resize(3 * static_cast<std::size_t>(nodes_));
+    read_values_.resize(3 * static_cast<std::size_t>(nodes_));  // pinned once here, not as the drivers' reads grow
     read_list_.resize(static_cast<std::size_t>(nodes_));
     records_.resize(cuda::kRecord * (static_cast<std::size_t>(points_) + 1));  // and the zero sink record
     partials_.resize(6 * cuda::kReduceBlocks);
@@ -298,8 +299,7 @@ class CudaBackend final : public StepEngine {
     }
     cuda::gather(count, read_list_.data(), u_.data(), staging_.data(), stream_);
     check(cudaGetLastError(), "launching the gather");
-    read_values_.resize(3 * nodes.size());
-    download(staging_.data(), read_values_.data(), read_values_.size() * sizeof(double));
+    download(staging_.data(), read_values_.data(), 3 * nodes.size() * sizeof(double));
     const std::span<double> u = host_u_.span();
     for (std::size_t k = 0; k < nodes.size(); ++k)
       for (std::size_t c = 0; c < 3; ++c)
