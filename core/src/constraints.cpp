@@ -24,11 +24,15 @@ void ConstraintSystem::update(const std::vector<NodalConstraints*>& sets, std::s
   sets_ = sets;
   revisions_.clear();
   for (const auto* set : sets_) revisions_.push_back(set->revision());
-  rebuild(mass);
+  rebuild(mass, !mass_changed);
 }
 
-void ConstraintSystem::rebuild(std::span<const double> mass) {
+void ConstraintSystem::rebuild(std::span<const double> mass, bool reuse_factors) {
   ++factorisations_;
+  std::vector<std::unique_ptr<Part>> reusable;
+  if (reuse_factors)
+    for (Block& block : blocks_)
+      for (auto& part : block.parts) reusable.push_back(std::move(part));
   for (NodalConstraints* set : sets_) {
     set->reactions.assign(set->size(), Vec3::Zero());
     if (set->values.size() != set->size() || (!set->points().empty() && !set->nodes().empty()))
@@ -59,16 +63,45 @@ void ConstraintSystem::rebuild(std::span<const double> mass) {
     blocks_.back().phi.components = {c};
     blocks_.back().rows = std::move(rows);
   }
-  for (Block& block : blocks_) build_block(block, mass);
+  for (Block& block : blocks_) build_block(block, mass, reusable);
 }
 
-void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
+void ConstraintSystem::build_block(Block& block, std::span<const double> mass,
+                                   std::vector<std::unique_ptr<Part>>& reusable) {
+  fill_phi(block, mass);
+  find_parts(block);
+  std::size_t factorised = 0;
+  for (auto& part : block.parts) {
+    const auto same =
+        std::find_if(reusable.begin(), reusable.end(), [&](const auto& old) { return old && old->keys == part->keys; });
+    if (same != reusable.end()) {
+      (*same)->rows = std::move(part->rows);
+      part = std::move(*same);
+      continue;
+    }
+    factorise(*part, block.phi, mass);
+    ++factorised;
+    ++parts_factorised_;
+  }
+  std::size_t entries = 0;
+  for (const auto& part : block.parts)
+    entries += static_cast<std::size_t>(part->factor.matrixL().nestedExpression().nonZeros());
+  log().debug(
+      "constraints: components {} share {} rows in {} independent part(s), {} factorised again; Phi {} "
+      "entries, the factors {} entries",
+      block.phi.components, block.rows.size(), block.parts.size(), factorised, block.phi.row_nodes.size(), entries);
+  const std::size_t size = block.rows.size() * block.phi.components.size();
+  block.y.assign(size, 0.0);
+  block.work.assign(size, 0.0);
+}
+
+// Phi's rows for the block's rows, by row and by node (scaled by 1 / m there).
+void ConstraintSystem::fill_phi(Block& block, std::span<const double> mass) const {
   const SupportRows& psi = model_.node_interpolation();
   ConstraintBlock& phi_block = block.phi;
   const auto m = static_cast<Eigen::Index>(block.rows.size());
   phi_block.rows = m;
   phi_block.revision = factorisations_;
-  std::vector<Eigen::Triplet<double>> triplets;
   std::vector<Index> support;
   std::vector<double> values;
   phi_block.row_offsets.assign(1, 0);
@@ -86,7 +119,6 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
       support.assign(psi.nodes.begin() + psi.offsets[node], psi.nodes.begin() + psi.offsets[node + 1]);
       values.assign(psi.values.begin() + psi.offsets[node], psi.values.begin() + psi.offsets[node + 1]);
     }
-    for (std::size_t k = 0; k < support.size(); ++k) triplets.emplace_back(r, support[k], values[k]);
     phi_block.row_nodes.insert(phi_block.row_nodes.end(), support.begin(), support.end());
     phi_block.row_values.insert(phi_block.row_values.end(), values.begin(), values.end());
     phi_block.row_offsets.push_back(static_cast<std::int64_t>(phi_block.row_nodes.size()));
@@ -116,15 +148,66 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
     phi_block.node_values[k] = phi_block.row_values[e] / mass[node];
   }
   phi_block.node_offsets.push_back(static_cast<std::int64_t>(order.size()));
+}
 
-  Eigen::SparseMatrix<double> phi(m, static_cast<Eigen::Index>(model_.node_count()));
+// The parts: rows joined when their supports share a node (then A couples them), by union-find over the rows; each
+// part's rows ascending, with their keys.
+void ConstraintSystem::find_parts(Block& block) const {
+  const ConstraintBlock& phi_block = block.phi;
+  std::vector<std::size_t> root(block.rows.size());
+  for (std::size_t r = 0; r < root.size(); ++r) root[r] = r;
+  const auto find = [&](std::size_t r) {
+    while (root[r] != r) r = root[r] = root[root[r]];
+    return r;
+  };
+  std::vector<std::int64_t> row_of_node(static_cast<std::size_t>(model_.node_count()), -1);
+  for (std::size_t r = 0; r < root.size(); ++r)
+    for (std::int64_t e = phi_block.row_offsets[r]; e < phi_block.row_offsets[r + 1]; ++e) {
+      std::int64_t& seen = row_of_node[static_cast<std::size_t>(phi_block.row_nodes[e])];
+      if (seen < 0) {
+        seen = static_cast<std::int64_t>(r);
+        continue;
+      }
+      const std::size_t a = find(r), b = find(static_cast<std::size_t>(seen));
+      if (a != b) root[std::max(a, b)] = std::min(a, b);  // each part's root is its first row
+    }
+  std::vector<std::size_t> part_of_root(root.size(), 0);
+  block.parts.clear();
+  for (std::size_t r = 0; r < root.size(); ++r) {
+    const std::size_t first = find(r);
+    if (first == r) {
+      part_of_root[r] = block.parts.size();
+      block.parts.push_back(std::make_unique<Part>());
+    }
+    Part& part = *block.parts[part_of_root[first]];
+    part.rows.push_back(r);
+    const NodalConstraints& set = *sets_[block.rows[r].set];
+    part.keys.push_back(set.points().empty() ? RowKey{&set, set.nodes()[block.rows[r].entry], Vec3::Zero()}
+                                             : RowKey{&set, -1, set.points()[block.rows[r].entry]});
+  }
+}
+
+std::size_t ConstraintSystem::parts() const {
+  std::size_t count = 0;
+  for (const Block& block : blocks_) count += block.parts.size();
+  return count;
+}
+
+// A = Phi M^-1 Phi^T over the part's rows, factorised.
+void ConstraintSystem::factorise(Part& part, const ConstraintBlock& phi_block, std::span<const double> mass) const {
+  std::vector<Eigen::Triplet<double>> triplets;
+  for (std::size_t i = 0; i < part.rows.size(); ++i)
+    for (std::int64_t e = phi_block.row_offsets[part.rows[i]]; e < phi_block.row_offsets[part.rows[i] + 1]; ++e)
+      triplets.emplace_back(static_cast<Eigen::Index>(i), phi_block.row_nodes[e], phi_block.row_values[e]);
+  Eigen::SparseMatrix<double> phi(static_cast<Eigen::Index>(part.rows.size()),
+                                  static_cast<Eigen::Index>(model_.node_count()));
   phi.setFromTriplets(triplets.begin(), triplets.end());
   Eigen::SparseMatrix<double> phi_m = phi;  // scaled by M^-1 column-wise
   for (Eigen::Index j = 0; j < phi_m.outerSize(); ++j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(phi_m, j); it; ++it) it.valueRef() /= mass[j];
   const Eigen::SparseMatrix<double> a = phi_m * Eigen::SparseMatrix<double>(phi.transpose());
-  block.factor.compute(a);
-  if (block.factor.info() != Eigen::Success) {
+  part.factor.compute(a);
+  if (part.factor.info() != Eigen::Success) {
     std::string names;
     for (int c : phi_block.components) names += "xyz"[c];
     throw InputError("/boundaries",
@@ -132,15 +215,9 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass) {
                                  "constraint matrix is singular): are two constraint sets prescribing coincident nodes?",
                                  names));
   }
-  const Eigen::VectorXd D = block.factor.vectorD();
-  block.inverse_diagonal.resize(static_cast<std::size_t>(D.size()));
-  for (Eigen::Index i = 0; i < D.size(); ++i) block.inverse_diagonal[static_cast<std::size_t>(i)] = 1.0 / D[i];
-  log().debug("constraints: components {} share {} rows; Phi {} entries, A {} entries, its factor {} entries",
-              phi_block.components, block.rows.size(), phi_block.row_nodes.size(), a.nonZeros(),
-              block.factor.matrixL().nestedExpression().nonZeros());
-  const std::size_t size = block.rows.size() * phi_block.components.size();
-  block.y.assign(size, 0.0);
-  block.work.assign(size, 0.0);
+  const Eigen::VectorXd D = part.factor.vectorD();
+  part.inverse_diagonal.resize(static_cast<std::size_t>(D.size()));
+  for (Eigen::Index i = 0; i < D.size(); ++i) part.inverse_diagonal[static_cast<std::size_t>(i)] = 1.0 / D[i];
 }
 
 namespace {
@@ -212,13 +289,13 @@ ConstrainedVector::~ConstrainedVector() = default;
 
 namespace {
 
-// The factor is A = P^T L D L^T P with L unit lower triangular (Eigen's SimplicialLDLT, L by column); x = A^-1 b
-// as b -> P b, L^-1, D^-1, L^-T, P^T. Solves K right-hand sides at once, components `first` .. first + K - 1 of
-// y (`stride` values per row), in place, interleaved in `x` (K per row) so that each pass over L serves all of
-// them: K independent chains of multiply-adds per entry, K fixed at compile time.
+// A part's factor is A = P^T L D L^T P with L unit lower triangular (Eigen's SimplicialLDLT, L by column); x = A^-1 b
+// as b -> P b, L^-1, D^-1, L^-T, P^T. Solves K right-hand sides at once, components `first` .. first + K - 1 of the
+// part's rows of y (`stride` values per block row), in place, interleaved in `x` (K per row) so that each pass over L
+// serves all of them: K independent chains of multiply-adds per entry, K fixed at compile time.
 template <int K>
 void solve_factored(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& factor, const double* D_inverse,
-                    double* y, std::size_t stride, std::size_t first, double* x) {
+                    const std::size_t* rows, double* y, std::size_t stride, std::size_t first, double* x) {
   const auto& L = factor.matrixL().nestedExpression();
   const int* P = factor.permutationP().indices().data();
   const auto n = static_cast<std::size_t>(L.cols());
@@ -226,7 +303,7 @@ void solve_factored(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& fa
   const int* inner = L.innerIndexPtr();
   const double* value = L.valuePtr();
   for (std::size_t i = 0; i < n; ++i)
-    for (int j = 0; j < K; ++j) x[K * static_cast<std::size_t>(P[i]) + j] = y[stride * i + first + j];
+    for (int j = 0; j < K; ++j) x[K * static_cast<std::size_t>(P[i]) + j] = y[stride * rows[i] + first + j];
   for (std::size_t col = 0; col < n; ++col) {
     double xc[K];
     for (int j = 0; j < K; ++j) xc[j] = x[K * col + j];
@@ -248,31 +325,38 @@ void solve_factored(const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>& fa
     for (int j = 0; j < K; ++j) x[K * col + j] -= sum[j];
   }
   for (std::size_t i = 0; i < n; ++i)
-    for (int j = 0; j < K; ++j) y[stride * i + first + j] = x[K * static_cast<std::size_t>(P[i]) + j];
+    for (int j = 0; j < K; ++j) y[stride * rows[i] + first + j] = x[K * static_cast<std::size_t>(P[i]) + j];
 }
 
 }  // namespace
 
+// Each part in turn (x: K values per row of the largest part).
+template <int K>
+void ConstraintSystem::solve_parts(const Block& block, double* y, std::size_t stride, std::size_t first, double* x) {
+  for (const auto& part : block.parts)
+    solve_factored<K>(part->factor, part->inverse_diagonal.data(), part->rows.data(), y, stride, first, x);
+}
+
 void ConstraintSystem::solve(const Block& block, std::vector<double>& y, std::vector<double>& work) const {
   const std::size_t k = block.phi.components.size(), rows = block.rows.size();
   work.resize(y.size());
-  const double* D_inverse = block.inverse_diagonal.data();
-  if (k == 1) return solve_factored<1>(block.factor, D_inverse, y.data(), 1, 0, work.data());
-  if (k == 2) return solve_factored<2>(block.factor, D_inverse, y.data(), 2, 0, work.data());
+  if (k == 1) return solve_parts<1>(block, y.data(), 1, 0, work.data());
+  if (k == 2) return solve_parts<2>(block, y.data(), 2, 0, work.data());
   // Three components on two threads: two on one, the third on the other; on three or more, one each (each in its
   // own part of `work`). The arithmetic of each component is the same either way.
   ThreadTeam& team = model_.team();
-  if (team.size() < 2 || rows < kRowsWorthAThread) return solve_factored<3>(block.factor, D_inverse, y.data(), 3, 0, work.data());
+  if (team.size() < 2 || rows < kRowsWorthAThread) return solve_parts<3>(block, y.data(), 3, 0, work.data());
   if (team.size() >= 3) {
     team.run([&](int thread) {
-      if (thread < 3) solve_factored<1>(block.factor, D_inverse, y.data(), 3, static_cast<std::size_t>(thread),
-                                        work.data() + static_cast<std::size_t>(thread) * rows);
+      if (thread < 3)
+        solve_parts<1>(block, y.data(), 3, static_cast<std::size_t>(thread),
+                       work.data() + static_cast<std::size_t>(thread) * rows);
     });
     return;
   }
   team.run([&](int thread) {
-    if (thread == 0) solve_factored<2>(block.factor, D_inverse, y.data(), 3, 0, work.data());
-    if (thread == 1) solve_factored<1>(block.factor, D_inverse, y.data(), 3, 2, work.data() + 2 * rows);
+    if (thread == 0) solve_parts<2>(block, y.data(), 3, 0, work.data());
+    if (thread == 1) solve_parts<1>(block, y.data(), 3, 2, work.data() + 2 * rows);
   });
 }
 

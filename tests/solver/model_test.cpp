@@ -623,6 +623,59 @@ TEST_P(ConstraintsTest, InterpolatedDisplacementEqualsThePrescribedOneToRoundOff
   for (std::size_t i = 0; i < u.size(); ++i) EXPECT_NEAR(mass[i / 3] * (u[i] - before[i]), force[i], 1e-18);
 }
 
+// A fixed bottom face and a few nodes of the top face (a needle's captured nodes) whose supports share no node: two
+// independent parts of the constraint matrix. When the top set changes, only its part is factorised again, and the
+// projection equals, to the last bits, that of a system built afresh; a set that couples the parts joins them.
+TEST_P(ConstraintsTest, AChangedSetRefactorisesOnlyItsOwnPart) {
+  const auto model = make_model(GetParam(), 0.3, 8);
+  const auto mass = model->lumped_mass();
+  NodalConstraints bottom, top;
+  bottom.name = "bottom";
+  top.name = "top";
+  std::vector<Index> upper;
+  for (Index i = 0; i < model->node_count(); ++i) {
+    if (model->nodes()[i][2] < 1e-9) bottom.add_node(i, Vec3::Zero());
+    if (model->nodes()[i][2] > 0.01 - 1e-9) upper.push_back(i);
+  }
+  ASSERT_GE(upper.size(), 4u);
+  for (std::size_t k = 0; k < 2; ++k) top.add_node(upper[k], Vec3(1e-4, 0.0, -2e-4));
+  ConstraintSystem constraints(*model);
+  constraints.update({&bottom, &top}, mass, true);
+  ASSERT_EQ(constraints.parts(), 2u) << "the bottom and top sets were meant to be uncoupled";
+  ASSERT_EQ(constraints.parts_factorised(), 2);
+
+  const auto projected = [&](ConstraintSystem& system) {
+    auto u = random_field(model->node_count(), 1e-3, 11);
+    system.enforce(u, 1.0);
+    return u;
+  };
+  const auto expect_same_as_afresh = [&](const std::vector<double>& u) {
+    ConstraintSystem afresh(*model);
+    afresh.update({&bottom, &top}, mass, true);
+    const auto reference = projected(afresh);
+    for (std::size_t i = 0; i < u.size(); ++i) ASSERT_EQ(u[i], reference[i]) << "unknown " << i;
+    for (const NodalConstraints* set : {&bottom, &top})
+      for (std::size_t k = 0; k < set->size(); ++k)
+        for (int c = 0; c < 3; ++c)
+          EXPECT_NEAR(model->interpolate_node(set->nodes()[k], u)[c], set->values[k][c], 1e-15) << set->name;
+  };
+  top.add_node(upper[2], Vec3(0.0, 1e-4, -2e-4));
+  constraints.update({&bottom, &top}, mass, false);
+  EXPECT_EQ(constraints.parts_factorised(), 3);  // the top's part only
+  expect_same_as_afresh(projected(constraints));
+
+  // A column of nodes from the bottom face to the top one couples the two: one part, factorised.
+  for (Index i = 0; i < model->node_count(); ++i)
+    if (std::abs(model->nodes()[i][0] - model->nodes()[upper[0]][0]) < 1e-3 &&
+        std::abs(model->nodes()[i][1] - model->nodes()[upper[0]][1]) < 1e-3 && model->nodes()[i][2] > 1e-9 &&
+        model->nodes()[i][2] < 0.01 - 1e-9)
+      top.add_node(i, Vec3(0.0, 0.0, -1e-4));
+  constraints.update({&bottom, &top}, mass, false);
+  EXPECT_EQ(constraints.parts(), 1u);
+  EXPECT_EQ(constraints.parts_factorised(), 4);
+  expect_same_as_afresh(projected(constraints));
+}
+
 INSTANTIATE_TEST_SUITE_P(EveryShapeFunction, ConstraintsTest,
                          ::testing::ValuesIn(test::catalog().names(Category::shape_function)));
 

@@ -5,12 +5,14 @@
 // per displacement component, where row K of Phi holds the shape functions at constrained node (or material
 // point) K. Then the interpolated displacement there equals the prescribed one to round-off, and the
 // reaction at K is lambda_K = y_K / alpha (alpha: the integrator's factor on M^-1 f in its update).
-// The matrices are factorised once per change of the constrained sets. Components with the same constrained
-// rows (a fixed boundary, a needle held in every direction) share one matrix and are solved together, one
-// pass over the factor for all of them.
+// The matrices are factorised when the constrained sets change, each independent part of them (rows coupled to no
+// row outside it) on its own, so that a needle capturing nodes far from a fixed boundary leaves the boundary's
+// factor as it was. Components with the same constrained rows (a fixed boundary, a needle held in every direction)
+// share one matrix and are solved together, one pass over the factor for all of them.
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <deque>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -68,31 +70,55 @@ class ConstraintSystem {
   // constrained value unchanged (the correction enforce() applies, for prescribed values held fixed). The
   // constrained dynamics live in that subspace; the stable-step monitor iterates in it.
   void project_out(std::span<double> v) const;
-  long factorisations() const { return factorisations_; }
+  long factorisations() const { return factorisations_; }      // rebuilds of the blocks
+  long parts_factorised() const { return parts_factorised_; }  // parts' factors computed (the others were kept)
+  std::size_t parts() const;                                   // independent parts now, over every block
 
  private:
   struct Row {
     std::size_t set;
     std::size_t entry;
   };
-  // A block with the rows it stands for and the factor of Phi M^-1 Phi^T.
+  // What a row constrains: its set and node, or its set and material point. Equal keys give equal rows of Phi
+  // (for the same masses), so a part whose keys all reappear after a rebuild keeps its factor.
+  struct RowKey {
+    const NodalConstraints* set;
+    Index node;  // -1 for a material point
+    Vec3 point;
+    bool operator==(const RowKey&) const = default;
+  };
+  // An independent diagonal block of A = Phi M^-1 Phi^T: rows whose supports share no node with any row outside it
+  // (a fixed boundary far from the needle's captured nodes). Each part has its own factor, and a rebuild factorises
+  // again only the parts whose rows changed.
+  struct Part {
+    std::vector<std::size_t> rows;  // into the block's rows, ascending
+    std::vector<RowKey> keys;
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor;
+    std::vector<double> inverse_diagonal;  // of the factor's D
+  };
+  // A block with the rows it stands for and the factors of Phi M^-1 Phi^T's parts.
   struct Block {
     ConstraintBlock phi;
     std::vector<Row> rows;
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> factor;
-    std::vector<double> inverse_diagonal;  // of the factor's D
+    std::vector<std::unique_ptr<Part>> parts;
     std::vector<double> y, work;  // rows x components: the residual, then the multipliers; solver scratch
   };
-  void rebuild(std::span<const double> mass);
-  void build_block(Block& block, std::span<const double> mass);
+  void rebuild(std::span<const double> mass, bool reuse_factors);
+  void build_block(Block& block, std::span<const double> mass, std::vector<std::unique_ptr<Part>>& reusable);
+  void fill_phi(Block& block, std::span<const double> mass) const;
+  void find_parts(Block& block) const;
+  void factorise(Part& part, const ConstraintBlock& phi, std::span<const double> mass) const;
   // y = (Phi M^-1 Phi^T)^-1 y in place, for every component of the block at once (work: scratch).
   void solve(const Block& block, std::vector<double>& y, std::vector<double>& work) const;
+  template <int K>
+  static void solve_parts(const Block& block, double* y, std::size_t stride, std::size_t first, double* x);
 
   const Model& model_;
   std::vector<NodalConstraints*> sets_;
   std::vector<std::uint64_t> revisions_;
-  std::deque<Block> blocks_;  // a deque: the factor cannot move
+  std::deque<Block> blocks_;
   long factorisations_ = 0;
+  long parts_factorised_ = 0;
 };
 
 }  // namespace mtled
