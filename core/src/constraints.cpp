@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <array>
 #include <set>
 
 #include "mtled/log.hpp"
@@ -224,65 +225,62 @@ namespace {
 
 // The two products below for a block of K components, K fixed at compile time: the loops over the components
 // unroll, and a pass over Phi's entries serves all of them (with the block's component count read at run time the
-// compiler kept an indexed inner loop per entry, two to three times slower on the default needle scene's rows).
-template <int K>
-void constrained_values_of(const ConstraintBlock& block, std::span<const double> v, std::vector<double>& out,
-                           ThreadTeam& team) {
-  int component[K];
-  for (int j = 0; j < K; ++j) component[j] = block.components[static_cast<std::size_t>(j)];
-  team.for_each_share(block.rows, [&](std::int64_t begin, std::int64_t end) {
-    for (auto r = static_cast<std::size_t>(begin); r < static_cast<std::size_t>(end); ++r) {
-      double sum[K] = {};
-      for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e) {
-        const double* vi = &v[3 * static_cast<std::size_t>(block.row_nodes[e])];
-        for (int j = 0; j < K; ++j) sum[j] += block.row_values[e] * vi[component[j]];
-      }
-      for (int j = 0; j < K; ++j) out[K * r + static_cast<std::size_t>(j)] = sum[j];
-    }
-  }, kRowsWorthAThread);
-}
-
-template <int K>
-void add_correction_of(const ConstraintBlock& block, const std::vector<double>& y, std::span<double> v,
-                       ThreadTeam& team) {
-  int component[K];
-  for (int j = 0; j < K; ++j) component[j] = block.components[static_cast<std::size_t>(j)];
-  team.for_each_share(static_cast<std::int64_t>(block.nodes.size()), [&](std::int64_t begin, std::int64_t end) {
-    for (auto n = static_cast<std::size_t>(begin); n < static_cast<std::size_t>(end); ++n) {
-      double sum[K] = {};
-      for (std::int64_t e = block.node_offsets[n]; e < block.node_offsets[n + 1]; ++e) {
-        const double* yr = &y[K * static_cast<std::size_t>(block.node_rows[e])];
-        for (int j = 0; j < K; ++j) sum[j] += block.node_values[e] * yr[j];
-      }
-      double* vn = &v[3 * static_cast<std::size_t>(block.nodes[n])];
-      for (int j = 0; j < K; ++j) vn[component[j]] += sum[j];
-    }
-  }, kRowsWorthAThread);
+// compiler kept an indexed inner loop per entry, two to three times slower on the default needle scene's rows):
+// body(component) gets the block's components in a std::array of their count.
+template <class Body>
+void with_components(const ConstraintBlock& block, Body&& body) {
+  const auto call = [&]<std::size_t K>(std::array<int, K> component) {
+    for (std::size_t j = 0; j < K; ++j) component[j] = block.components[j];
+    body(component);
+  };
+  switch (block.components.size()) {
+    case 1:
+      return call(std::array<int, 1>{});
+    case 2:
+      return call(std::array<int, 2>{});
+    default:
+      return call(std::array<int, 3>{});
+  }
 }
 
 }  // namespace
 
 void constrained_values(const ConstraintBlock& block, std::span<const double> v, std::vector<double>& out,
                         ThreadTeam& team) {
-  switch (block.components.size()) {
-    case 1:
-      return constrained_values_of<1>(block, v, out, team);
-    case 2:
-      return constrained_values_of<2>(block, v, out, team);
-    default:
-      return constrained_values_of<3>(block, v, out, team);
-  }
+  with_components(block, [&]<std::size_t K>(const std::array<int, K>& component) {
+    team.for_each_share(
+        block.rows,
+        [&](std::int64_t begin, std::int64_t end) {
+          for (auto r = static_cast<std::size_t>(begin); r < static_cast<std::size_t>(end); ++r) {
+            double sum[K] = {};
+            for (std::int64_t e = block.row_offsets[r]; e < block.row_offsets[r + 1]; ++e) {
+              const double* vi = &v[3 * static_cast<std::size_t>(block.row_nodes[e])];
+              for (std::size_t j = 0; j < K; ++j) sum[j] += block.row_values[e] * vi[component[j]];
+            }
+            for (std::size_t j = 0; j < K; ++j) out[K * r + j] = sum[j];
+          }
+        },
+        kRowsWorthAThread);
+  });
 }
 
 void add_correction(const ConstraintBlock& block, const std::vector<double>& y, std::span<double> v, ThreadTeam& team) {
-  switch (block.components.size()) {
-    case 1:
-      return add_correction_of<1>(block, y, v, team);
-    case 2:
-      return add_correction_of<2>(block, y, v, team);
-    default:
-      return add_correction_of<3>(block, y, v, team);
-  }
+  with_components(block, [&]<std::size_t K>(const std::array<int, K>& component) {
+    team.for_each_share(
+        static_cast<std::int64_t>(block.nodes.size()),
+        [&](std::int64_t begin, std::int64_t end) {
+          for (auto n = static_cast<std::size_t>(begin); n < static_cast<std::size_t>(end); ++n) {
+            double sum[K] = {};
+            for (std::int64_t e = block.node_offsets[n]; e < block.node_offsets[n + 1]; ++e) {
+              const double* yr = &y[K * static_cast<std::size_t>(block.node_rows[e])];
+              for (std::size_t j = 0; j < K; ++j) sum[j] += block.node_values[e] * yr[j];
+            }
+            double* vn = &v[3 * static_cast<std::size_t>(block.nodes[n])];
+            for (std::size_t j = 0; j < K; ++j) vn[component[j]] += sum[j];
+          }
+        },
+        kRowsWorthAThread);
+  });
 }
 
 ConstrainedVector::~ConstrainedVector() = default;
