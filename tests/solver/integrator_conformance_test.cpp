@@ -221,6 +221,49 @@ TEST_P(IntegratorConformance, AStableStepLoweredDuringTheRunIsFollowed) {
   }
 }
 
+// Dynamic relaxation tunes its damping, while a load is held, to held_damping_factor times its estimate of the
+// lowest frequency. The estimate is a Rayleigh quotient of the last increment, so on these linear oscillators it can
+// never fall below the slowest one's frequency (after mass scaling); the ramp uses the estimate itself, so up to the
+// end of the ramp every factor takes the same steps, bit for bit; and every factor stops within its tolerance of the
+// static solution, although below the estimate the slow oscillators are underdamped and their increments pass
+// through zero at every turning point (a step of 0.1 of the stable one makes those turns slow: a bound from the
+// increment alone stopped at factor 0.8 with an error of 1.3 times the tolerance).
+TEST(DynamicRelaxation, HeldDampingFactorLeavesTheRampAloneAndStopsWithinTheTolerance) {
+  constexpr double kTolerance = 1e-8;
+  constexpr long kLoadSteps = 10;
+  std::vector<std::vector<double>> at_ramp_end;
+  for (const double factor : {1.0, 0.8, 0.5}) {
+    Oscillators system;
+    const auto integrator = test::make<TimeIntegrator>("dynamic_relaxation", {{"tolerance", kTolerance},
+                                                                              {"load_steps", kLoadSteps},
+                                                                              {"max_steps", 100000},
+                                                                              {"held_damping_factor", factor},
+                                                                              {"time_step_factor", 0.1}});
+    integrator->initialise(system);
+    double slowest = INFINITY;  // of the mass-scaled system
+    for (std::size_t d = 0; d < 6; ++d) slowest = std::min(slowest, system.omega(d));
+    while (!integrator->finished(system)) {
+      integrator->step(system);
+      if (system.steps_completed() == kLoadSteps)
+        at_ramp_end.emplace_back(system.displacement().begin(), system.displacement().end());
+      const RelaxationReport relaxation = *integrator->report().relaxation;
+      // (Less a slack for the round-off of f(u_n) - f(u_n-1), about 1e-16 |u| / |du|, as du falls to 1e-10 of u.)
+      if (system.steps_completed() > 2 * kLoadSteps) {
+        EXPECT_GE(relaxation.lowest_frequency, slowest * (1.0 - 1e-3)) << "factor " << factor;
+      }
+    }
+    double largest = 0.0;
+    for (std::size_t d = 0; d < 6; ++d) largest = std::max(largest, std::abs(system.static_solution(d)));
+    for (std::size_t d = 0; d < 6; ++d)
+      EXPECT_NEAR(system.displacement()[d], system.static_solution(d), kTolerance * largest)
+          << "factor " << factor << ", unknown " << d;
+    RecordProperty("steps_at_factor_" + std::to_string(factor), std::to_string(system.steps_completed()));
+  }
+  ASSERT_EQ(at_ramp_end.size(), 3u);
+  EXPECT_EQ(at_ramp_end[1], at_ramp_end[0]);
+  EXPECT_EQ(at_ramp_end[2], at_ramp_end[0]);
+}
+
 INSTANTIATE_TEST_SUITE_P(EveryIntegrator, IntegratorConformance, ::testing::ValuesIn(integrator_names()),
                          [](const auto& test_info) { return test_info.param; });
 

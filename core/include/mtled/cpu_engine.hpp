@@ -53,6 +53,7 @@ class CpuEngine : public StepEngine {
 
  private:
   // One share's part of the step's sums, and the energy of its fastest node.
+  double beta_ = 1.0;  // the last prediction's, for the step's sums
   struct Partial {
     StepSums sums;
     double fastest_energy = 0.0;

@@ -47,13 +47,15 @@ inline IncrementSums increment_sums(std::span<const double> u, std::span<const d
 // Node i's part of a completed step's sums (StepSums): u_n = u, u_(n-1) = u_previous, u_(n+1) = u_next, u~ = free (the
 // prediction before the projection). `fastest_energy` is the largest |m_I (u_n - u_(n-1)).(u_(n+1) - u_n)| so far.
 inline void add_step_sums(std::size_t i, const double* u, const double* u_previous, const double* u_next,
-                          const double* free, const double* nodal_mass, StepSums& sums, double& fastest_energy) {
+                          const double* free, const double* nodal_mass, double beta, StepSums& sums,
+                          double& fastest_energy) {
   double added = 0.0, product = 0.0;
   for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
     const double after = u_next[d] - u[d], before = free[d] - u[d];
     added += std::max(0.0, after * after - before * before);
     product += (u[d] - u_previous[d]) * after;
     sums.largest_increment = std::max(sums.largest_increment, std::abs(after));
+    sums.largest_residual_step = std::max(sums.largest_residual_step, std::abs(after - beta * (u[d] - u_previous[d])));
     sums.largest_displacement = std::max(sums.largest_displacement, std::abs(u_next[d]));
   }
   sums.projection_energy += nodal_mass[i] * added;
@@ -71,6 +73,7 @@ inline void combine_step_sums(const StepSums& share, double share_fastest_energy
                               double& fastest_energy) {
   total.largest_increment = std::max(total.largest_increment, share.largest_increment);
   total.largest_displacement = std::max(total.largest_displacement, share.largest_displacement);
+  total.largest_residual_step = std::max(total.largest_residual_step, share.largest_residual_step);
   total.projection_energy += share.projection_energy;
   total.kinetic_product += share.kinetic_product;
   if (share_fastest_energy > fastest_energy) {

@@ -158,7 +158,7 @@ class CudaBackend final : public StepEngine {
     read_values_.resize(3 * static_cast<std::size_t>(nodes_));  // pinned once here, not as the drivers' reads grow
     read_list_.resize(static_cast<std::size_t>(nodes_));
     records_.resize(cuda::kRecord * (static_cast<std::size_t>(points_) + 1));  // and the zero sink record
-    partials_.resize(6 * cuda::kReduceBlocks);
+    partials_.resize(cuda::kStepPartials * cuda::kReduceBlocks);
     evaluation_.resize(1);
     first_non_finite_.resize(1);
     sums_.resize(1);
@@ -228,6 +228,7 @@ class CudaBackend final : public StepEngine {
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
     const ScopeTimer timed(engine_s_);
+    beta_ = beta;
     if (!f_ext.empty()) to_device(f_ext, f_ext_.data());
     check(cudaMemsetAsync(first_non_finite_.data(), 0xff, sizeof(unsigned long long), stream_), "cudaMemsetAsync");
     cuda::predict(nodes_, u_.data(), u_previous_.data(), f_.data(), f_ext.empty() ? nullptr : f_ext_.data(),
@@ -264,7 +265,7 @@ class CudaBackend final : public StepEngine {
 
   StepSums commit(bool) override {
     const ScopeTimer timed(engine_s_);
-    cuda::step_sums(nodes_, prediction_.data(), free_.data(), u_.data(), u_previous_.data(), mass_.data(),
+    cuda::step_sums(nodes_, prediction_.data(), free_.data(), u_.data(), u_previous_.data(), mass_.data(), beta_,
                     partials_.data(), sums_.data(), stream_);
     check(cudaGetLastError(), "launching the step's sums");
     cuda::StepSumsDevice host{};
@@ -273,8 +274,12 @@ class CudaBackend final : public StepEngine {
     u_.swap(prediction_);
     stale();
     ++steps_;
-    return {host.largest_increment, host.largest_displacement, host.projection_energy, host.kinetic_product,
-            static_cast<Index>(host.fastest_node)};
+    return {host.largest_increment,
+            host.largest_displacement,
+            host.projection_energy,
+            host.kinetic_product,
+            static_cast<Index>(host.fastest_node),
+            host.largest_residual_step};
   }
 
   Index internal_forces(std::span<const double> u, std::span<double> f) override {
@@ -461,6 +466,7 @@ class CudaBackend final : public StepEngine {
   std::unique_ptr<DeviceRows> rows_;
   DeviceBuffer<double> u_, u_previous_, prediction_, free_, f_, f_previous_, f_ext_, scratch_u_, scratch_f_;
   DeviceBuffer<double> mass_, records_, partials_, staging_;
+  double beta_ = 1.0;                     // the last prediction's, for the step's sums
   DeviceBuffer<std::int32_t> read_list_;  // the nodes displacement_at last gathered
   DeviceBuffer<unsigned long long> first_non_finite_;
   DeviceBuffer<cuda::EvaluationDevice> evaluation_;

@@ -327,9 +327,10 @@ __global__ void increment_finish(const double* partials, IncrementSumsDevice* ou
 }
 
 // Values: 0 largest increment, 1 largest displacement, 2 projection energy, 3 kinetic product, 4 the fastest node's
-// |m product|, 5 the fastest node (as a double: exact below 2^53).
+// |m product|, 5 the fastest node (as a double: exact below 2^53), 6 the largest residual step. StepReduce reduces
+// the sums 0-3 and 6 (at 4 of its array).
 struct StepReduce {
-  __device__ double operator()(int v, double a, double b) const { return v <= 1 ? fmax(a, b) : a + b; }
+  __device__ double operator()(int v, double a, double b) const { return v <= 1 || v == 4 ? fmax(a, b) : a + b; }
 };
 
 __device__ void fastest_of(double& energy, double& node, double other_energy, double other_node) {
@@ -355,8 +356,8 @@ __device__ void fastest_reduce(double (&mine)[Values]) {
 }
 
 __global__ void step_partials(std::int32_t nodes, const double* prediction, const double* free, const double* u,
-                              const double* u_previous, const double* mass, double* partials) {
-  double mine[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+                              const double* u_previous, const double* mass, double beta, double* partials) {
+  double mine[kStepPartials] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
   for (std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x; i < nodes;
        i += static_cast<std::int64_t>(gridDim.x) * blockDim.x) {
     double added = 0.0, product = 0.0;
@@ -367,6 +368,7 @@ __global__ void step_partials(std::int32_t nodes, const double* prediction, cons
       product += (u[d] - u_previous[d]) * after;
       mine[0] = fmax(mine[0], fabs(after));
       mine[1] = fmax(mine[1], fabs(prediction[d]));
+      mine[6] = fmax(mine[6], fabs(after - beta * (u[d] - u_previous[d])));
     }
     mine[2] += mass[i] * added;
     const double e = mass[i] * product;
@@ -374,22 +376,23 @@ __global__ void step_partials(std::int32_t nodes, const double* prediction, cons
     fastest_of(mine[4], mine[5], fabs(e), static_cast<double>(i));
   }
   fastest_reduce(mine);
-  double sums[4] = {mine[0], mine[1], mine[2], mine[3]};
-  block_reduce<4>(sums, StepReduce{});
+  double sums[5] = {mine[0], mine[1], mine[2], mine[3], mine[6]};
+  block_reduce<5>(sums, StepReduce{});
   if (threadIdx.x == 0) {
     for (int v = 0; v < 4; ++v) partials[v * kReduceBlocks + blockIdx.x] = sums[v];
     partials[4 * kReduceBlocks + blockIdx.x] = mine[4];
     partials[5 * kReduceBlocks + blockIdx.x] = mine[5];
+    partials[6 * kReduceBlocks + blockIdx.x] = sums[4];
   }
 }
 
 __global__ void step_finish(const double* partials, StepSumsDevice* out) {
-  double mine[6];
-  for (int v = 0; v < 6; ++v) mine[v] = partials[v * kReduceBlocks + threadIdx.x];
+  double mine[kStepPartials];
+  for (int v = 0; v < kStepPartials; ++v) mine[v] = partials[v * kReduceBlocks + threadIdx.x];
   fastest_reduce(mine);
-  double sums[4] = {mine[0], mine[1], mine[2], mine[3]};
-  block_reduce<4>(sums, StepReduce{});
-  if (threadIdx.x == 0) *out = {sums[0], sums[1], sums[2], sums[3], mine[4], static_cast<long long>(mine[5])};
+  double sums[5] = {mine[0], mine[1], mine[2], mine[3], mine[6]};
+  block_reduce<5>(sums, StepReduce{});
+  if (threadIdx.x == 0) *out = {sums[0], sums[1], sums[2], sums[3], mine[4], static_cast<long long>(mine[5]), sums[4]};
 }
 
 // ---- layouts ----------------------------------------------------------------------------------------------------
@@ -466,10 +469,10 @@ void increment_sums(std::int32_t nodes, const double* u4, const double* u_previo
 }
 
 void step_sums(std::int32_t nodes, const double* prediction4, const double* free4, const double* u4,
-               const double* u_previous4, const double* mass, double* partials, StepSumsDevice* out,
+               const double* u_previous4, const double* mass, double beta, double* partials, StepSumsDevice* out,
                cudaStream_t stream) {
-  step_partials<<<kReduceBlocks, kReduceThreads, 0, stream>>>(nodes, prediction4, free4, u4, u_previous4, mass,
-                                                               partials);
+  step_partials<<<kReduceBlocks, kReduceThreads, 0, stream>>>(nodes, prediction4, free4, u4, u_previous4, mass, beta,
+                                                              partials);
   step_finish<<<1, kReduceThreads, 0, stream>>>(partials, out);
 }
 

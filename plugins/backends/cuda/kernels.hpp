@@ -76,6 +76,7 @@ struct EvaluationDevice {
 struct StepSumsDevice {
   double largest_increment, largest_displacement, projection_energy, kinetic_product, fastest_energy;
   long long fastest_node;
+  double largest_residual_step;
 };
 constexpr int kReduceBlocks = 256;
 constexpr int kReduceThreads = 256;
@@ -84,10 +85,11 @@ constexpr int kReduceThreads = 256;
 void increment_sums(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4,
                     const double* f_previous4, const double* mass, double* partials, IncrementSumsDevice* out,
                     cudaStream_t stream);
-// The step's sums (StepSums) of pred (after the projection), free (before it), u and u_prev, into *out (device);
-// partials: 6 kReduceBlocks doubles of scratch.
+// The step's sums (StepSums) of pred (after the projection), free (before it), u and u_prev, with the update's beta,
+// into *out (device); partials: kStepPartials kReduceBlocks doubles of scratch.
+constexpr int kStepPartials = 7;
 void step_sums(std::int32_t nodes, const double* prediction4, const double* free4, const double* u4,
-               const double* u_previous4, const double* mass, double* partials, StepSumsDevice* out,
+               const double* u_previous4, const double* mass, double beta, double* partials, StepSumsDevice* out,
                cudaStream_t stream);
 
 // Between the host's 3 doubles per node and the device's 4: v3 (contiguous, copied in one transfer) to or from v4.

@@ -150,6 +150,7 @@ class MpiBackend final : public CpuEngine {
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
     const ScopeTimer timer(update_s_);
+    beta_ = beta;
     const double* external = f_ext.empty() ? nullptr : f_ext.data();
     std::int64_t first_bad = kNoneIndex;
     for (const Index node : owned_) {
@@ -213,23 +214,28 @@ class MpiBackend final : public CpuEngine {
     double fastest = 0.0;
     for (const Index node : owned_)
       add_step_sums(static_cast<std::size_t>(node), u_.data(), u_previous_.data(), prediction_.data(), free_.data(),
-                    mass_.data(), mine, fastest);
+                    mass_.data(), beta_, mine, fastest);
     u_previous_.swap(u_);
     u_.swap(prediction_);
     previous_whole_ = whole_;
     whole_ = false;
     // The sums and whether this rank's monitors read the whole displacement: one exchange.
     const auto start = Clock::now();
-    const double values[kStepValues] = {mine.largest_increment, mine.largest_displacement, mine.projection_energy,
-                                        mine.kinetic_product,   fastest,
-                                        static_cast<double>(mine.fastest_node), whole_displacement ? 1.0 : 0.0};
+    const double values[kStepValues] = {mine.largest_increment,
+                                        mine.largest_displacement,
+                                        mine.projection_energy,
+                                        mine.kinetic_product,
+                                        fastest,
+                                        static_cast<double>(mine.fastest_node),
+                                        whole_displacement ? 1.0 : 0.0,
+                                        mine.largest_residual_step};
     const std::vector<double>& all = from_every_rank(values);
     StepSums sums;
     double fastest_energy = 0.0;
     bool whole = false;
     for (int q = 0; q < ranks_; ++q) {
       const double* v = &all[kStepValues * static_cast<std::size_t>(q)];
-      combine_step_sums(StepSums{v[0], v[1], v[2], v[3], static_cast<Index>(v[5])}, v[4], sums, fastest_energy);
+      combine_step_sums(StepSums{v[0], v[1], v[2], v[3], static_cast<Index>(v[5]), v[7]}, v[4], sums, fastest_energy);
       whole = whole || v[6] != 0.0;
     }
     if (whole)
@@ -612,11 +618,12 @@ class MpiBackend final : public CpuEngine {
                   {"whole_gather_bytes", 24 * model.node_count() * (ranks_ - 1)}};
   }
 
-  static constexpr int kStepValues = 7;  // StepSums, the fastest node's energy and the whole-gather flag, as doubles
+  static constexpr int kStepValues = 8;  // StepSums, the fastest node's energy and the whole-gather flag, as doubles
   static constexpr int kForceTag = 0, kGhostTag = 1;
   static constexpr std::int64_t kNoneIndex = std::numeric_limits<std::int64_t>::max();
   static constexpr int kLayers = 4;  // edges from the boundary told apart; a support spans one or two
   int rank_ = 0, ranks_ = 1;
+  double beta_ = 1.0;  // the last prediction's, for the step's sums
   PointRange points_{0, 0};
   std::vector<int> owner_;  // per node: the rank that sums its force
   NodeExchange forces_;  // contributions to other ranks' nodes out, to this rank's in

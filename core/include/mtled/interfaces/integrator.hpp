@@ -29,6 +29,9 @@ struct StepSums {
   // sum_I m_I (u_n - u_(n-1)).(u_(n+1) - u_n): the product of the half-step velocities around step n (kg m^2).
   double kinetic_product = 0.0;
   Index fastest_node = 0;  // the node with the largest |m_I (u_n - u_(n-1)).(u_(n+1) - u_n)|
+  // max |(u_(n+1) - u_n) - beta (u_n - u_(n-1))| over the unknowns (m): alpha M^-1 times the residual after the
+  // projection, the part of the increment the forces made this step.
+  double largest_residual_step = 0.0;
 };
 
 // The semi-discrete equations of motion M u'' + f_int(u) = f_ext(t), M lumped (one mass per node, three
