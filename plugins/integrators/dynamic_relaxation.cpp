@@ -67,12 +67,10 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
         .defaults(0.8)
         .doc(
             "while a load is held, tune the damping to this fraction of the estimated lowest frequency: the estimate "
-            "lies "
-            "at or above the lowest frequency (it is a Rayleigh quotient, and the body softens as it settles), and "
-            "damping "
-            "tuned above the lowest frequency slows its mode far more than damping tuned as far below it; 1 tunes it "
-            "to "
-            "the estimate itself. The ramp always uses the estimate, so the loading path does not depend on this");
+            "lies at or above the lowest frequency (it is a Rayleigh quotient, and the body softens as it settles), "
+            "and damping tuned above the lowest frequency slows its mode far more than damping tuned as far below it; "
+            "1 tunes it to the estimate itself. The ramp always uses the estimate, so the loading path does not depend "
+            "on this");
     d.integer("damping_update_steps").unit("1").at_least(1).defaults(10).doc(
         "re-estimate the lowest eigenfrequency (and so the damping) every this many steps");
     d.example({{"load_steps", 200}, {"tolerance", 1e-5}});

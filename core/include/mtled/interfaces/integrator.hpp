@@ -85,7 +85,7 @@ struct RelaxationReport {
   double error_bound = INFINITY;      // m: bound on the distance to the steady state, largest over the unknowns
   double relative_error_bound = 0.0;  // error_bound over the largest displacement (0 before any)
   double tolerance = 0.0;             // on relative_error_bound
-  double lowest_frequency = 0.0;      // rad/s: the estimate the damping is tuned to
+  double lowest_frequency = 0.0;      // rad/s: the last estimate (the damping is tuned to it or a fraction of it)
   double convergence_rate = 0.0;      // per step
 };
 
