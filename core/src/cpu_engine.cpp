@@ -54,7 +54,6 @@ Index CpuEngine::evaluate_forces(IncrementSums* sums) {
 }
 
 std::int64_t CpuEngine::predict(double alpha, double beta, std::span<const double> f_ext) {
-  beta_ = beta;
   const ScopeTimer timer(update_s_);
   const double* external = f_ext.empty() ? nullptr : f_ext.data();
   std::fill(first_bad_.begin(), first_bad_.end(), -1);
@@ -89,14 +88,14 @@ void CpuEngine::add_correction(const ConstraintBlock& block, const std::vector<d
   mtled::add_correction(block, y, prediction_, model_->team());
 }
 
-StepSums CpuEngine::commit(bool) {
+StepSums CpuEngine::commit(bool, double beta) {
   const ScopeTimer timer(update_s_);
   const int parts = parts_for(model_->node_count());
   std::fill(partial_.begin(), partial_.begin() + parts, Partial{});
   for_each_node_share([&](std::size_t begin, std::size_t end, int part) {
     Partial& mine = partial_[static_cast<std::size_t>(part)];
     for (std::size_t i = begin; i < end; ++i)
-      add_step_sums(i, u_.data(), u_previous_.data(), prediction_.data(), free_.data(), mass_.data(), beta_, mine.sums,
+      add_step_sums(i, u_.data(), u_previous_.data(), prediction_.data(), free_.data(), mass_.data(), beta, mine.sums,
                     mine.fastest_energy);
   }, parts);
   StepSums sums;

@@ -67,15 +67,15 @@ StepSums DiscreteSystem::advance(double alpha, double beta, double time, double 
   explicit_update(u.data(), previous_displacement().data(), f_ext, f_int_.data(), mass().data(), alpha, beta,
                   u_next_.data(), 0, mass().size());
   // beta (u_n - u_(n-1)), before complete_step moves the states on.
-  std::vector<double> carried(u.size());
-  for (std::size_t i = 0; i < u.size(); ++i) carried[i] = beta * (u[i] - previous_displacement()[i]);
+  carried_.resize(u.size());
+  for (std::size_t i = 0; i < u.size(); ++i) carried_[i] = beta * (u[i] - previous_displacement()[i]);
   complete_step(u_next_, time, load_fraction, alpha);
   StepSums sums;
   const auto after = displacement(), before = previous_displacement();
   for (std::size_t i = 0; i < after.size(); ++i) {
     sums.largest_increment = std::max(sums.largest_increment, std::abs(after[i] - before[i]));
     sums.largest_displacement = std::max(sums.largest_displacement, std::abs(after[i]));
-    sums.largest_residual_step = std::max(sums.largest_residual_step, std::abs(after[i] - before[i] - carried[i]));
+    sums.largest_residual_step = std::max(sums.largest_residual_step, std::abs(after[i] - before[i] - carried_[i]));
   }
   return sums;
 }

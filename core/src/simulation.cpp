@@ -289,7 +289,7 @@ StepSums Simulation::advance(double alpha, double beta, double new_time, double 
   }
   project(new_time, new_load_fraction, alpha);
   displacement_whole_ = monitors_read(load_.step);
-  sums_ = engine_->commit(displacement_whole_);
+  sums_ = engine_->commit(displacement_whole_, beta);
   return sums_;
 }
 
@@ -300,7 +300,7 @@ void Simulation::complete_step(std::span<double> u_new, double new_time, double 
   project(new_time, new_load_fraction, alpha);
   engine_->prediction(u_new);  // handed back corrected
   displacement_whole_ = monitors_read(load_.step);
-  sums_ = engine_->commit(displacement_whole_);
+  sums_ = engine_->commit(displacement_whole_, 1.0);
 }
 
 StepRecord Simulation::last_step() const {

@@ -28,7 +28,7 @@ class CpuEngine : public StepEngine {
   void prediction(std::span<double> out) override;
   void constrained_values(const ConstraintBlock& block, std::vector<double>& out) override;
   void add_correction(const ConstraintBlock& block, const std::vector<double>& y) override;
-  StepSums commit(bool whole_displacement) override;
+  StepSums commit(bool whole_displacement, double beta) override;
   Index internal_forces(std::span<const double> u, std::span<double> f) override;
 
  protected:
@@ -53,7 +53,6 @@ class CpuEngine : public StepEngine {
 
  private:
   // One share's part of the step's sums, and the energy of its fastest node.
-  double beta_ = 1.0;  // the last prediction's, for the step's sums
   struct Partial {
     StepSums sums;
     double fastest_energy = 0.0;

@@ -45,17 +45,18 @@ inline IncrementSums increment_sums(std::span<const double> u, std::span<const d
 }
 
 // Node i's part of a completed step's sums (StepSums): u_n = u, u_(n-1) = u_previous, u_(n+1) = u_next, u~ = free (the
-// prediction before the projection). `fastest_energy` is the largest |m_I (u_n - u_(n-1)).(u_(n+1) - u_n)| so far.
+// prediction before the projection), beta the update's factor on u_n - u_(n-1). `fastest_energy` is the largest
+// |m_I (u_n - u_(n-1)).(u_(n+1) - u_n)| so far.
 inline void add_step_sums(std::size_t i, const double* u, const double* u_previous, const double* u_next,
                           const double* free, const double* nodal_mass, double beta, StepSums& sums,
                           double& fastest_energy) {
   double added = 0.0, product = 0.0;
   for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
-    const double after = u_next[d] - u[d], before = free[d] - u[d];
+    const double after = u_next[d] - u[d], before = free[d] - u[d], last = u[d] - u_previous[d];
     added += std::max(0.0, after * after - before * before);
-    product += (u[d] - u_previous[d]) * after;
+    product += last * after;
     sums.largest_increment = std::max(sums.largest_increment, std::abs(after));
-    sums.largest_residual_step = std::max(sums.largest_residual_step, std::abs(after - beta * (u[d] - u_previous[d])));
+    sums.largest_residual_step = std::max(sums.largest_residual_step, std::abs(after - beta * last));
     sums.largest_displacement = std::max(sums.largest_displacement, std::abs(u_next[d]));
   }
   sums.projection_energy += nodal_mass[i] * added;

@@ -228,7 +228,6 @@ class CudaBackend final : public StepEngine {
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
     const ScopeTimer timed(engine_s_);
-    beta_ = beta;
     if (!f_ext.empty()) to_device(f_ext, f_ext_.data());
     check(cudaMemsetAsync(first_non_finite_.data(), 0xff, sizeof(unsigned long long), stream_), "cudaMemsetAsync");
     cuda::predict(nodes_, u_.data(), u_previous_.data(), f_.data(), f_ext.empty() ? nullptr : f_ext_.data(),
@@ -263,9 +262,9 @@ class CudaBackend final : public StepEngine {
     check(cudaGetLastError(), "launching the constraint correction");
   }
 
-  StepSums commit(bool) override {
+  StepSums commit(bool, double beta) override {
     const ScopeTimer timed(engine_s_);
-    cuda::step_sums(nodes_, prediction_.data(), free_.data(), u_.data(), u_previous_.data(), mass_.data(), beta_,
+    cuda::step_sums(nodes_, prediction_.data(), free_.data(), u_.data(), u_previous_.data(), mass_.data(), beta,
                     partials_.data(), sums_.data(), stream_);
     check(cudaGetLastError(), "launching the step's sums");
     cuda::StepSumsDevice host{};
@@ -466,7 +465,6 @@ class CudaBackend final : public StepEngine {
   std::unique_ptr<DeviceRows> rows_;
   DeviceBuffer<double> u_, u_previous_, prediction_, free_, f_, f_previous_, f_ext_, scratch_u_, scratch_f_;
   DeviceBuffer<double> mass_, records_, partials_, staging_;
-  double beta_ = 1.0;                     // the last prediction's, for the step's sums
   DeviceBuffer<std::int32_t> read_list_;  // the nodes displacement_at last gathered
   DeviceBuffer<unsigned long long> first_non_finite_;
   DeviceBuffer<cuda::EvaluationDevice> evaluation_;

@@ -150,7 +150,6 @@ class MpiBackend final : public CpuEngine {
 
   std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
     const ScopeTimer timer(update_s_);
-    beta_ = beta;
     const double* external = f_ext.empty() ? nullptr : f_ext.data();
     std::int64_t first_bad = kNoneIndex;
     for (const Index node : owned_) {
@@ -208,13 +207,13 @@ class MpiBackend final : public CpuEngine {
 
   // The rank's own nodes' sums, combined in rank order; then each rank receives its ghost nodes' u_(n+1), or every
   // node's when some rank's monitors read it this step.
-  StepSums commit(bool whole_displacement) override {
+  StepSums commit(bool whole_displacement, double beta) override {
     const ScopeTimer timer(update_s_);
     StepSums mine;
     double fastest = 0.0;
     for (const Index node : owned_)
       add_step_sums(static_cast<std::size_t>(node), u_.data(), u_previous_.data(), prediction_.data(), free_.data(),
-                    mass_.data(), beta_, mine, fastest);
+                    mass_.data(), beta, mine, fastest);
     u_previous_.swap(u_);
     u_.swap(prediction_);
     previous_whole_ = whole_;
@@ -623,7 +622,6 @@ class MpiBackend final : public CpuEngine {
   static constexpr std::int64_t kNoneIndex = std::numeric_limits<std::int64_t>::max();
   static constexpr int kLayers = 4;  // edges from the boundary told apart; a support spans one or two
   int rank_ = 0, ranks_ = 1;
-  double beta_ = 1.0;  // the last prediction's, for the step's sums
   PointRange points_{0, 0};
   std::vector<int> owner_;  // per node: the rank that sums its force
   NodeExchange forces_;  // contributions to other ranks' nodes out, to this rank's in

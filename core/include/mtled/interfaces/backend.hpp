@@ -64,8 +64,9 @@ class StepEngine {
   // u~ becomes u_(n+1) (u_(n-1) <- u_n <- u~); returns the step's sums. `whole_displacement`: a monitor on some
   // process reads u_(n+1) at every node (an engine that spreads the nodes over processes gathers it then, and
   // otherwise brings each process only what its forces read; displacement() gathers it on demand, every process
-  // calling it alike).
-  virtual StepSums commit(bool whole_displacement) = 0;
+  // calling it alike). `beta`: the update's factor on u_n - u_(n-1), for StepSums::largest_residual_step (1 where
+  // the step came from set_prediction).
+  virtual StepSums commit(bool whole_displacement, double beta) = 0;
 
   // f = f_int(u) for host vectors, the state untouched (the monitors' extra evaluations, and integrators outside the
   // central-difference family). Returns -1 or the lowest-numbered inadmissible integration point.

@@ -70,13 +70,13 @@ class DiscreteSystem {
   // two calls, so that the kernel can keep the vectors where it computes them (a GPU backend) and fuse the passes:
   // evaluate_forces() computes f_int(u_n) (and, when asked, IncrementSums, before the coefficients are chosen);
   // advance() makes the update and completes the step as complete_step() does, and returns the step's sums. Both
-  // shipped integrators step this way. The defaults go through the calls above (and fill only largest_increment and
-  // largest_displacement); the kernel overrides them.
+  // shipped integrators step this way. The defaults go through the calls above (and fill only largest_increment,
+  // largest_displacement and largest_residual_step); the kernel overrides them.
   virtual IncrementSums evaluate_forces(bool increment_sums);
   virtual StepSums advance(double alpha, double beta, double time, double load_fraction);
 
  private:
-  std::vector<double> f_int_, f_int_previous_, f_ext_, u_next_;  // the defaults' vectors
+  std::vector<double> f_int_, f_int_previous_, f_ext_, u_next_, carried_;  // the defaults' vectors
 };
 
 // A steady-state integrator's account of how far it is from the steady state.
