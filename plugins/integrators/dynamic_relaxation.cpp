@@ -59,7 +59,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
         "along the load curve, held while the body relaxes), so that needle.csv and reactions.csv hold the forces "
         "in equilibrium at each; 1 relaxes only at full load. Where the answer depends on the loading path (the "
         "kinematic needle captures tissue as it advances), ramp slowly enough (load_steps) that each row equals a run "
-        "relaxed at that load: on the default scene 4 x its load_steps (docs/validation.md)");
+        "relaxed at that load: on the default scene 8000 (docs/validation.md)");
     d.number("held_damping_factor")
         .unit("1")
         .positive()
