@@ -53,13 +53,13 @@ Index CpuEngine::evaluate_forces(IncrementSums* sums) {
   return bad;
 }
 
-std::int64_t CpuEngine::predict(double alpha, double beta, std::span<const double> f_ext) {
+std::int64_t CpuEngine::predict(const UpdateCoefficients& update, std::span<const double> f_ext) {
   const ScopeTimer timer(update_s_);
   const double* external = f_ext.empty() ? nullptr : f_ext.data();
   std::fill(first_bad_.begin(), first_bad_.end(), -1);
   for_each_node_share([&](std::size_t begin, std::size_t end, int part) {
-    explicit_update(u_.data(), u_previous_.data(), external, f_.data(), mass_.data(), alpha, beta, prediction_.data(),
-                    begin, end);
+    explicit_update(u_.data(), u_previous_.data(), external, f_.data(), f_previous_.data(), mass_.data(), update,
+                    prediction_.data(), begin, end);
     for (std::size_t d = 3 * begin; d < 3 * end; ++d) {
       free_[d] = prediction_[d];
       if (!std::isfinite(prediction_[d]) && first_bad_[static_cast<std::size_t>(part)] < 0)

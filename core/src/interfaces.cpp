@@ -55,7 +55,7 @@ IncrementSums DiscreteSystem::evaluate_forces(bool increment_sums) {
   return mtled::increment_sums(u, previous_displacement(), f_int_, f_int_previous_, mass());
 }
 
-StepSums DiscreteSystem::advance(double alpha, double beta, double time, double load_fraction) {
+StepSums DiscreteSystem::advance(const UpdateCoefficients& update, double time, double load_fraction) {
   const auto u = displacement();
   u_next_.resize(u.size());
   const double* f_ext = nullptr;
@@ -64,12 +64,12 @@ StepSums DiscreteSystem::advance(double alpha, double beta, double time, double 
     external_forces(f_ext_);
     f_ext = f_ext_.data();
   }
-  explicit_update(u.data(), previous_displacement().data(), f_ext, f_int_.data(), mass().data(), alpha, beta,
-                  u_next_.data(), 0, mass().size());
+  explicit_update(u.data(), previous_displacement().data(), f_ext, f_int_.data(), f_int_previous_.data(), mass().data(),
+                  update, u_next_.data(), 0, mass().size());
   // beta (u_n - u_(n-1)), before complete_step moves the states on.
   carried_.resize(u.size());
-  for (std::size_t i = 0; i < u.size(); ++i) carried_[i] = beta * (u[i] - previous_displacement()[i]);
-  complete_step(u_next_, time, load_fraction, alpha);
+  for (std::size_t i = 0; i < u.size(); ++i) carried_[i] = update.beta * (u[i] - previous_displacement()[i]);
+  complete_step(u_next_, time, load_fraction, update.alpha);
   StepSums sums;
   const auto after = displacement(), before = previous_displacement();
   for (std::size_t i = 0; i < after.size(); ++i) {

@@ -275,21 +275,21 @@ void Simulation::project(double new_time, double new_load_fraction, double alpha
   constraint_system_->enforce(prediction, alpha);
 }
 
-StepSums Simulation::advance(double alpha, double beta, double new_time, double new_load_fraction) {
+StepSums Simulation::advance(const UpdateCoefficients& update, double new_time, double new_load_fraction) {
   std::span<const double> f_ext;
   if (has_external_forces()) {
     f_ext_.resize(3 * static_cast<std::size_t>(model_->node_count()));
     external_forces(f_ext_);
     f_ext = f_ext_;
   }
-  if (const std::int64_t bad = engine_->predict(alpha, beta, f_ext); bad >= 0) {
+  if (const std::int64_t bad = engine_->predict(update, f_ext); bad >= 0) {
     std::vector<double> u(3 * static_cast<std::size_t>(model_->node_count()));
     engine_->prediction(u);
     not_finite(bad, u[static_cast<std::size_t>(bad)], new_time);
   }
-  project(new_time, new_load_fraction, alpha);
+  project(new_time, new_load_fraction, update.alpha);
   displacement_whole_ = monitors_read(load_.step);
-  sums_ = engine_->commit(displacement_whole_, beta);
+  sums_ = engine_->commit(displacement_whole_, update.beta);
   return sums_;
 }
 

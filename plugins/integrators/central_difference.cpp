@@ -48,7 +48,7 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
     if (const double stable = system.stable_time_step(); stable != stable_) replan(system, stable, alpha, beta);
     system.evaluate_forces(false);
     const double t = time_origin_ + static_cast<double>(system.step() + 1 - step_origin_) * h_;
-    system.advance(alpha, beta, t, load_fraction(curve_, t / load_time_));
+    system.advance({alpha, beta, 0.0}, t, load_fraction(curve_, t / load_time_));
   }
 
   bool finished(const DiscreteSystem& system) const override { return system.step() >= planned_steps_; }

@@ -23,7 +23,7 @@ class CpuEngine : public StepEngine {
   std::span<const double> previous_displacement() override { return u_previous_; }
 
   Index evaluate_forces(IncrementSums* sums) override;
-  std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override;
+  std::int64_t predict(const UpdateCoefficients& update, std::span<const double> f_ext) override;
   void set_prediction(std::span<const double> u) override;
   void prediction(std::span<double> out) override;
   void constrained_values(const ConstraintBlock& block, std::vector<double>& out) override;

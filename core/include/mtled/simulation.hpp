@@ -48,7 +48,7 @@ class Simulation final : public DiscreteSystem, private StepControl {
   void steady_state_reached() override { ++steady_states_; }
   // The fused form both shipped integrators use: the engine's passes, with only the sums coming back.
   IncrementSums evaluate_forces(bool increment_sums) override;
-  StepSums advance(double alpha, double beta, double new_time, double new_load_fraction) override;
+  StepSums advance(const UpdateCoefficients& update, double new_time, double new_load_fraction) override;
 
   const Model& model() const { return *model_; }
   double load_fraction() const { return load_.load_fraction; }

@@ -226,12 +226,13 @@ class CudaBackend final : public StepEngine {
     return first_bad(result);
   }
 
-  std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
+  std::int64_t predict(const UpdateCoefficients& update, std::span<const double> f_ext) override {
     const ScopeTimer timed(engine_s_);
     if (!f_ext.empty()) to_device(f_ext, f_ext_.data());
     check(cudaMemsetAsync(first_non_finite_.data(), 0xff, sizeof(unsigned long long), stream_), "cudaMemsetAsync");
-    cuda::predict(nodes_, u_.data(), u_previous_.data(), f_.data(), f_ext.empty() ? nullptr : f_ext_.data(),
-                  mass_.data(), alpha, beta, prediction_.data(), free_.data(), first_non_finite_.data(), stream_);
+    cuda::predict(nodes_, u_.data(), u_previous_.data(), f_.data(), f_previous_.data(),
+                  f_ext.empty() ? nullptr : f_ext_.data(), mass_.data(), update.alpha, update.beta, update.gamma,
+                  prediction_.data(), free_.data(), first_non_finite_.data(), stream_);
     check(cudaGetLastError(), "launching the update");
     unsigned long long first = 0;
     download(first_non_finite_.data(), &first, sizeof(first));

@@ -266,14 +266,16 @@ __global__ void __launch_bounds__(kNodeThreads) node_pass(NodePass<Real> a) {
 // ---- the update and the sums ------------------------------------------------------------------------------------
 
 __global__ void predict_kernel(std::int32_t nodes, const double* u, const double* u_previous, const double* f,
-                               const double* f_ext, const double* mass, double alpha, double beta, double* prediction,
-                               double* free, unsigned long long* first_non_finite) {
+                               const double* f_previous, const double* f_ext, const double* mass, double alpha,
+                               double beta, double gamma, double* prediction, double* free,
+                               unsigned long long* first_non_finite) {
   const std::int64_t i = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (i >= nodes) return;
   const double step = alpha / mass[i];
   for (int c = 0; c < 3; ++c) {
     const std::int64_t d = 4 * i + c;
-    const double value = u[d] + beta * (u[d] - u_previous[d]) + step * ((f_ext != nullptr ? f_ext[d] : 0.0) - f[d]);
+    const double f_int = gamma != 0.0 ? f[d] + gamma * (f[d] - f_previous[d]) : f[d];
+    const double value = u[d] + beta * (u[d] - u_previous[d]) + step * ((f_ext != nullptr ? f_ext[d] : 0.0) - f_int);
     prediction[d] = value;
     free[d] = value;
     if (!isfinite(value)) atomicMin(first_non_finite, static_cast<unsigned long long>(3 * i + c));
@@ -453,11 +455,12 @@ void internal_forces(const PointPass<Real>& points, const NodePass<Real>& nodes,
 template void internal_forces<float>(const PointPass<float>&, const NodePass<float>&, cudaStream_t);
 template void internal_forces<double>(const PointPass<double>&, const NodePass<double>&, cudaStream_t);
 
-void predict(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4, const double* f_ext4,
-             const double* mass, double alpha, double beta, double* prediction4, double* free4,
-             unsigned long long* first_non_finite, cudaStream_t stream) {
-  predict_kernel<<<blocks_for(nodes), kThreads, 0, stream>>>(nodes, u4, u_previous4, f4, f_ext4, mass, alpha, beta,
-                                                              prediction4, free4, first_non_finite);
+void predict(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4,
+             const double* f_previous4, const double* f_ext4, const double* mass, double alpha, double beta,
+             double gamma, double* prediction4, double* free4, unsigned long long* first_non_finite,
+             cudaStream_t stream) {
+  predict_kernel<<<blocks_for(nodes), kThreads, 0, stream>>>(nodes, u4, u_previous4, f4, f_previous4, f_ext4, mass,
+                                                             alpha, beta, gamma, prediction4, free4, first_non_finite);
 }
 
 void increment_sums(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4,

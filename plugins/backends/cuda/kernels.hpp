@@ -58,11 +58,13 @@ struct NodePass {
 template <class Real>
 void internal_forces(const PointPass<Real>& points, const NodePass<Real>& nodes, cudaStream_t stream);
 
-// pred = u + beta (u - u_prev) + alpha M^-1 (f_ext - f) (f_ext null: none), free = pred; first_non_finite gets the
-// lowest unknown (3 node + component) of pred that is not finite.
-void predict(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4, const double* f_ext4,
-             const double* mass, double alpha, double beta, double* prediction4, double* free4,
-             unsigned long long* first_non_finite, cudaStream_t stream);
+// pred = u + beta (u - u_prev) + alpha M^-1 (f_ext - f - gamma (f - f_prev)) (f_ext null: none; f_prev read only
+// where gamma != 0), free = pred; first_non_finite gets the lowest unknown (3 node + component) of pred that is not
+// finite.
+void predict(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4,
+             const double* f_previous4, const double* f_ext4, const double* mass, double alpha, double beta,
+             double gamma, double* prediction4, double* free4, unsigned long long* first_non_finite,
+             cudaStream_t stream);
 
 // What the host reads back of the reductions (one copy per call).
 struct IncrementSumsDevice {

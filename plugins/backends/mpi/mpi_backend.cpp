@@ -148,13 +148,13 @@ class MpiBackend final : public CpuEngine {
     return -1;
   }
 
-  std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) override {
+  std::int64_t predict(const UpdateCoefficients& update, std::span<const double> f_ext) override {
     const ScopeTimer timer(update_s_);
     const double* external = f_ext.empty() ? nullptr : f_ext.data();
     std::int64_t first_bad = kNoneIndex;
     for (const Index node : owned_) {
       const auto i = static_cast<std::size_t>(node);
-      explicit_update(u_.data(), u_previous_.data(), external, f_.data(), mass_.data(), alpha, beta,
+      explicit_update(u_.data(), u_previous_.data(), external, f_.data(), f_previous_.data(), mass_.data(), update,
                       prediction_.data(), i, i + 1);
       for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
         free_[d] = prediction_[d];

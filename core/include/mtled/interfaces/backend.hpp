@@ -51,9 +51,9 @@ class StepEngine {
   // f_n = f_int(u_n), kept for predict(); with `sums`, IncrementSums too. Returns -1, or the lowest-numbered
   // integration point whose F is inadmissible.
   virtual Index evaluate_forces(IncrementSums* sums) = 0;
-  // u~ = u_n + beta (u_n - u_(n-1)) + alpha M^-1 (f_ext - f_n), f_ext empty for none. Returns -1, or the first
-  // unknown of u~ that is not finite.
-  virtual std::int64_t predict(double alpha, double beta, std::span<const double> f_ext) = 0;
+  // u~ = u_n + beta (u_n - u_(n-1)) + alpha M^-1 (f_ext - f_n - gamma (f_n - f_(n-1))) (UpdateCoefficients), f_ext
+  // empty for none. Returns -1, or the first unknown of u~ that is not finite.
+  virtual std::int64_t predict(const UpdateCoefficients& update, std::span<const double> f_ext) = 0;
   // u~ from the host instead (a step an integrator computed itself), and back to the host.
   virtual void set_prediction(std::span<const double> u) = 0;
   virtual void prediction(std::span<double> out) = 0;

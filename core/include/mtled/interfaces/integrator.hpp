@@ -34,6 +34,16 @@ struct StepSums {
   double largest_residual_step = 0.0;
 };
 
+// The coefficients of one damped central-difference step (explicit_update.hpp):
+//   u_(n+1) = u_n + beta (u_n - u_(n-1)) + alpha M^-1 (f_ext - f_int(u_n) - gamma (f_int(u_n) - f_int(u_(n-1)))).
+// beta < 1 is mass-proportional damping; gamma > 0 stiffness-proportional damping (b K v with b = gamma h: a mode at
+// h w has the damping ratio gamma h w / 2), which damps the highest modes and leaves the lowest nearly alone.
+struct UpdateCoefficients {
+  double alpha = 0.0;
+  double beta = 1.0;
+  double gamma = 0.0;
+};
+
 // The semi-discrete equations of motion M u'' + f_int(u) = f_ext(t), M lumped (one mass per node, three
 // unknowns per node), and the one call that completes a step. The kernel implements it for a scene; the
 // integrator conformance suite implements it for linear oscillators. An integrator sees nothing else.
@@ -66,14 +76,14 @@ class DiscreteSystem {
   // load (a relaxed load increment): what the outputs record as an equilibrium.
   virtual void steady_state_reached() {}
 
-  // The damped central-difference family, u_(n+1) = u_n + beta (u_n - u_(n-1)) + alpha M^-1 (f_ext - f_int(u_n)), in
-  // two calls, so that the kernel can keep the vectors where it computes them (a GPU backend) and fuse the passes:
-  // evaluate_forces() computes f_int(u_n) (and, when asked, IncrementSums, before the coefficients are chosen);
-  // advance() makes the update and completes the step as complete_step() does, and returns the step's sums. Both
-  // shipped integrators step this way. The defaults go through the calls above (and fill only largest_increment,
-  // largest_displacement and largest_residual_step); the kernel overrides them.
+  // The damped central-difference family (UpdateCoefficients) in two calls, so that the kernel can keep the vectors
+  // where it computes them (a GPU backend) and fuse the passes: evaluate_forces() computes f_int(u_n) (and, when
+  // asked, IncrementSums, before the coefficients are chosen); advance() makes the update and completes the step as
+  // complete_step() does, and returns the step's sums. Both shipped integrators step this way. The defaults go
+  // through the calls above (and fill only largest_increment, largest_displacement and largest_residual_step); the
+  // kernel overrides them.
   virtual IncrementSums evaluate_forces(bool increment_sums);
-  virtual StepSums advance(double alpha, double beta, double time, double load_fraction);
+  virtual StepSums advance(const UpdateCoefficients& update, double time, double load_fraction);
 
  private:
   std::vector<double> f_int_, f_int_previous_, f_ext_, u_next_, carried_;  // the defaults' vectors
