@@ -133,16 +133,16 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     // The lowest frequency is re-estimated from the last increment before this step's coefficients are set.
     const long n = system.step();
     // Held from this step on when the ramp had reached the increment's end before it (the ramp's steps never use it).
-    const double gamma = ramp_step_ >= increment_end() ? held_stiffness_damping_ : 0.0;
+    const double gamma = held() ? held_stiffness_damping_ : 0.0;
     const bool estimate = n >= 2 && n % update_every_ == 0;
     const IncrementSums increment = system.evaluate_forces(estimate);
     if (estimate) estimate_frequency(increment);
     // The ramp advances until the current increment's end, then holds while the body relaxes.
-    if (ramp_step_ < increment_end()) ++ramp_step_;
+    if (!held()) ++ramp_step_;
     const double fraction = increment_load_fraction();
     const StepSums sums = system.advance({alpha_, beta_ * increment_scale, gamma},
                                          time_origin_ + static_cast<double>(n + 1 - step_origin_) * h_, fraction);
-    if (ramp_step_ >= increment_end()) relax(system, sums);
+    if (held()) relax(system, sums);
     // A long relaxation shows nothing else while it runs (--log-level debug).
     if ((n + 1) % 500 == 0)
       log().debug(
@@ -195,6 +195,8 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
                                           static_cast<double>(increments_)));
   }
   long increment_end() const { return increment_start(std::min(relaxed_ + 1, increments_)); }
+  // The ramp has reached the current increment's load and holds it while the body relaxes.
+  bool held() const { return ramp_step_ >= increment_end(); }
 
   // Each increment carries the load from k / N to (k + 1) / N along the load curve (so the relaxed states sit at
   // exactly k / N of the load, and a smooth curve starts and stops each increment without a jolt); one increment
@@ -237,8 +239,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     if (!(increment.inertia > 0.0) || !(increment.stiffness > 0.0) || !std::isfinite(increment.stiffness / increment.inertia))
       return;
     estimated_frequency_ = std::sqrt(increment.stiffness / increment.inertia);
-    const bool held = ramp_step_ >= increment_end();
-    set_frequency(std::min((held ? held_damping_factor_ : 1.0) * estimated_frequency_, 2.0 / h_));
+    set_frequency(std::min((held() ? held_damping_factor_ : 1.0) * estimated_frequency_, 2.0 / h_));
   }
 
   // Updates the error estimate from the step just completed (the header: from the increment and from the residual);

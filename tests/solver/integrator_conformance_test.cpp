@@ -14,9 +14,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "mtled/errors.hpp"
 #include "mtled/interfaces/integrator.hpp"
@@ -25,16 +25,13 @@
 namespace mtled {
 namespace {
 
-// Two nodes, three unknowns each, with different masses, stiffnesses and loads.
-class Oscillators final : public DiscreteSystem {
+// The state of a linear system of two nodes (three unknowns each) under constant loads, starting from rest at u = 0:
+// what the systems below share; each gives its masses, loads, forces and stable step.
+class TwoNodeSystem : public DiscreteSystem {
  public:
-  Oscillators() : mass_{2.0, 0.5}, stiffness_{100.0, 60.0, 30.0, 40.0, 90.0, 10.0}, load_{1.0, -2.0, 0.5, 3.0, 1.0, -1.0} {
-    u_.assign(6, 0.0);
-    u_previous_.assign(6, 0.0);
-  }
+  TwoNodeSystem(std::vector<double> mass, std::vector<double> load)
+      : mass_(std::move(mass)), load_(std::move(load)), u_(6, 0.0), u_previous_(6, 0.0) {}
 
-  double omega(std::size_t d) const { return std::sqrt(stiffness_[d] / mass_[d / 3]); }
-  double static_solution(std::size_t d) const { return load_[d] / stiffness_[d]; }
   long steps_completed() const { return step_; }
 
   std::span<const double> displacement() const override { return u_; }
@@ -42,6 +39,33 @@ class Oscillators final : public DiscreteSystem {
   std::span<const double> mass() const override { return mass_; }
   long step() const override { return step_; }
   double time() const override { return time_; }
+  bool has_external_forces() const override { return true; }
+  void external_forces(std::span<double> f) override { std::copy(load_.begin(), load_.end(), f.begin()); }
+  void complete_step(std::span<double> u_new, double time, double, double) override {
+    u_previous_.swap(u_);
+    std::copy(u_new.begin(), u_new.end(), u_.begin());
+    time_ = time;
+    ++step_;
+  }
+
+ protected:
+  std::vector<double> mass_, load_;
+
+ private:
+  std::vector<double> u_, u_previous_;
+  long step_ = 0;
+  double time_ = 0.0;
+};
+
+// Two nodes, three unknowns each, with different masses, stiffnesses and loads.
+class Oscillators final : public TwoNodeSystem {
+ public:
+  Oscillators()
+      : TwoNodeSystem({2.0, 0.5}, {1.0, -2.0, 0.5, 3.0, 1.0, -1.0}), stiffness_{100.0, 60.0, 30.0, 40.0, 90.0, 10.0} {}
+
+  double omega(std::size_t d) const { return std::sqrt(stiffness_[d] / mass_[d / 3]); }
+  double static_solution(std::size_t d) const { return load_[d] / stiffness_[d]; }
+
   // Central differences are stable for h <= 2 / omega_max.
   double stable_time_step() const override {
     double fastest = 0.0;
@@ -59,23 +83,13 @@ class Oscillators final : public DiscreteSystem {
   void internal_forces(std::span<const double> u, std::span<double> f) override {
     for (std::size_t d = 0; d < 6; ++d) f[d] = stiffness_[d] * u[d];
   }
-  bool has_external_forces() const override { return true; }
-  void external_forces(std::span<double> f) override { std::copy(load_.begin(), load_.end(), f.begin()); }
-  void complete_step(std::span<double> u_new, double time, double, double) override {
-    u_previous_.swap(u_);
-    std::copy(u_new.begin(), u_new.end(), u_.begin());
-    time_ = time;
-    ++step_;
-  }
 
  private:
   double node_step(std::size_t node) const {
     return 2.0 / std::max({omega(3 * node), omega(3 * node + 1), omega(3 * node + 2)});
   }
 
-  std::vector<double> mass_, stiffness_, load_, u_, u_previous_;
-  long step_ = 0;
-  double time_ = 0.0;
+  std::vector<double> stiffness_;
   double stable_scale_ = 1.0;
 };
 
@@ -270,27 +284,21 @@ TEST(DynamicRelaxation, HeldDampingFactorLeavesTheRampAloneAndStopsWithinTheTole
 // w ~ 10 rad/s): a nonsymmetric stiffness, as the consistent-integration correction gives the meshless forces, whose
 // complex eigenvalues (k +- i c) / m make one mode of the pair grow at w c / (2 k) = 0.1 /s undamped. The other
 // unknowns are fixed by a stiff spring so that every unknown has a static solution.
-class CirculatoryPair final : public DiscreteSystem {
+class CirculatoryPair final : public TwoNodeSystem {
  public:
   static constexpr double kSlow = 0.01, kPair = 100.0, kCirculation = 2.0;
-  CirculatoryPair() : u_(6, 0.0), u_previous_(6, 0.0) {}
+  CirculatoryPair() : TwoNodeSystem({1.0, 1.0}, {1.0, 0.0, 0.0, 2.0, -1.0, 0.0}) {}
 
   // K u = F: u_0 = F_0 / kSlow; the pair from the 2 x 2 system.
   std::vector<double> static_solution() const {
     std::vector<double> u(6, 0.0);
-    u[0] = kLoad[0] / kSlow;
+    u[0] = load_[0] / kSlow;
     const double det = kPair * kPair + kCirculation * kCirculation;
-    u[3] = (kPair * kLoad[3] - kCirculation * kLoad[4]) / det;
-    u[4] = (kCirculation * kLoad[3] + kPair * kLoad[4]) / det;
+    u[3] = (kPair * load_[3] - kCirculation * load_[4]) / det;
+    u[4] = (kCirculation * load_[3] + kPair * load_[4]) / det;
     return u;
   }
-  long steps_completed() const { return step_; }
 
-  std::span<const double> displacement() const override { return u_; }
-  std::span<const double> previous_displacement() const override { return u_previous_; }
-  std::span<const double> mass() const override { return mass_; }
-  long step() const override { return step_; }
-  double time() const override { return time_; }
   double stable_time_step() const override { return 2.0 / std::sqrt(kPair + kCirculation); }
   void equalise_critical_steps() override {}
   void internal_forces(std::span<const double> u, std::span<double> f) override {
@@ -301,20 +309,6 @@ class CirculatoryPair final : public DiscreteSystem {
     f[4] = -kCirculation * u[3] + kPair * u[4];
     f[5] = kPair * u[5];
   }
-  bool has_external_forces() const override { return true; }
-  void external_forces(std::span<double> f) override { std::copy(kLoad.begin(), kLoad.end(), f.begin()); }
-  void complete_step(std::span<double> u_new, double time, double, double) override {
-    u_previous_.swap(u_);
-    std::copy(u_new.begin(), u_new.end(), u_.begin());
-    time_ = time;
-    ++step_;
-  }
-
- private:
-  static constexpr std::array<double, 6> kLoad{1.0, 0.0, 0.0, 2.0, -1.0, 0.0};
-  std::vector<double> mass_{1.0, 1.0}, u_, u_previous_;
-  long step_ = 0;
-  double time_ = 0.0;
 };
 
 // Mass damping tuned to the slow mode (0.8 x 0.1 /s) is weaker than the pair's growth; held stiffness damping (the
