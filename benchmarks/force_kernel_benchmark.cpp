@@ -10,6 +10,7 @@
 #include <memory>
 #include <random>
 
+#include "mtled/analysis/scene_sections.hpp"
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/scene.hpp"
 #include "mtled/simd.hpp"
@@ -35,7 +36,7 @@ Simulation& simulation_for(int threads, const std::string& precision) {
     SceneDocument document = read_scene(MTLED_SOURCE_DIR "/share/scenes/needle_small_sample.json");
     document.root["discretisation"]["precision"] = precision;
     s.catalog = std::make_unique<PluginCatalog>(plugin_search_path({}, scene_plugin_paths(document)));
-    const Scene scene = validate_scene(std::move(document), *s.catalog);
+    const Scene scene = validate_scene(std::move(document), *s.catalog, run_scene_sections());  // its "output" too
     s.simulation = std::make_unique<Simulation>(scene, *s.catalog);
   }
   return *s.simulation;
