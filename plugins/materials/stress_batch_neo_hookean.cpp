@@ -14,38 +14,37 @@ HWY_BEFORE_NAMESPACE();
 namespace mtled::HWY_NAMESPACE {
 
 void NeoHookeanStressBatch(const hyperelastic::NeoHookeanConstants& k, StressBatch& batch) {
-  const DoubleTag d;
-  const DoubleVec one = hn::Set(d, 1.0);
-  for (int p = 0; p < StressBatch::kCapacity; p += static_cast<int>(hn::Lanes(d))) {
-    const Mat3V F = load_matrix(d, batch.F, p);
-    const DoubleVec J = determinant(F);
-    const DoubleMask ok = admissible(d, F, J);
-    const DoubleVec safe_J = hn::IfThenElse(ok, J, one);
-    const DoubleVec inverse_J = hn::Div(one, safe_J);
+  const PointVec one = set(1.0);
+  for (int p = 0; p < StressBatch::kCapacity; p += kPassLanes) {
+    const Mat3V F = load_matrix(batch.F, p);
+    const PointVec J = determinant(F);
+    const PointMask ok = admissible(F, J);
+    const PointVec safe_J = select(ok, J, one);
+    const PointVec inverse_J = div(one, safe_J);
     // F^-1 = adj(F) / J: (F^-1)_ij = cofactor_ji / J.
     const auto& f = F.m;
     Mat3V Fi;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) {
         const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
-        Fi.m[i][j] = hn::Mul(hn::Sub(hn::Mul(f[r0][c0], f[r1][c1]), hn::Mul(f[r0][c1], f[r1][c0])), inverse_J);
+        Fi.m[i][j] = mul(sub(mul(f[r0][c0], f[r1][c1]), mul(f[r0][c1], f[r1][c0])), inverse_J);
       }
-    DoubleVec squared_norm = hn::Zero(d);
+    PointVec squared_norm = zeros();
     for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) squared_norm = hn::MulAdd(f[i][j], f[i][j], squared_norm);
-    const DoubleVec shear = hn::Mul(hn::Set(d, k.mu), hn::Exp(d, hn::Mul(hn::Set(d, -2.0 / 3.0), hn::Log(d, safe_J))));
-    const DoubleVec J_dU_dJ = hn::Mul(hn::Mul(hn::Set(d, k.two_over_D), safe_J), hn::Sub(safe_J, one));
+      for (int j = 0; j < 3; ++j) squared_norm = mul_add(f[i][j], f[i][j], squared_norm);
+    const PointVec shear = mul(set(k.mu), exp(mul(set(-2.0 / 3.0), log(safe_J))));
+    const PointVec J_dU_dJ = mul(mul(set(k.two_over_D), safe_J), sub(safe_J, one));
     // tr C / 3 is 1 exactly at F = I, so S(I) = 0 exactly.
-    const DoubleVec coefficient = hn::NegMulAdd(shear, hn::Div(squared_norm, hn::Set(d, 3.0)), J_dU_dJ);
+    const PointVec coefficient = neg_mul_add(shear, div(squared_norm, set(3.0)), J_dU_dJ);
     Mat3V S;
     for (int i = 0; i < 3; ++i)
       for (int j = i; j < 3; ++j) {
-        const DoubleVec C_inverse =
-            hn::MulAdd(Fi.m[i][2], Fi.m[j][2], hn::MulAdd(Fi.m[i][1], Fi.m[j][1], hn::Mul(Fi.m[i][0], Fi.m[j][0])));
-        S.m[i][j] = hn::Mul(coefficient, C_inverse);
-        if (i == j) S.m[i][j] = hn::Add(S.m[i][j], shear);
+        const PointVec C_inverse =
+            mul_add(Fi.m[i][2], Fi.m[j][2], mul_add(Fi.m[i][1], Fi.m[j][1], mul(Fi.m[i][0], Fi.m[j][0])));
+        S.m[i][j] = mul(coefficient, C_inverse);
+        if (i == j) S.m[i][j] = add(S.m[i][j], shear);
       }
-    store_stress(d, S, ok, batch, p);
+    store_stress(S, ok, batch, p);
   }
 }
 
