@@ -128,7 +128,7 @@ inline PointMask ge(const PointVec& a, const PointVec& b) {
 inline PointMask both(const PointMask& a, const PointMask& b) {
   return each<PointMask>([](auto x, auto y) { return hn::And(x, y); }, a, b);
 }
-inline PointMask first_only(const PointMask& a, const PointMask& b) {  // b and not a
+inline PointMask and_not(const PointMask& a, const PointMask& b) {  // (not a) and b, as hn::AndNot
   return each<PointMask>([](auto x, auto y) { return hn::AndNot(x, y); }, a, b);
 }
 inline PointMask negate(const PointMask& a) {
@@ -293,7 +293,7 @@ MTLED_EIGEN_INLINE SymmetricEigen3V symmetric_eigen3(const Mat3V& A) {
   const Vec3V c01 = cross(r0, r1), c02 = cross(r0, r2), c12 = cross(r1, r2);
   const PointVec n01 = dot(c01, c01), n02 = dot(c02, c02), n12 = dot(c12, c12);
   const PointMask take01 = both(ge(n01, n02), ge(n01, n12));
-  const PointMask take02 = first_only(take01, ge(n02, n12));
+  const PointMask take02 = and_not(take01, ge(n02, n12));
   const Vec3V chosen = select(take01, c01, select(take02, c02, c12));
   const PointVec chosen_norm = select(take01, n01, select(take02, n02, n12));
   const Vec3V v1 = scale(chosen, div(one, sqrt(chosen_norm)));
