@@ -10,7 +10,6 @@
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "force_kernel.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
-#include <hwy/cache_control.h>
 #include <hwy/highway.h>
 
 #include "force_kernel.hpp"
@@ -105,12 +104,17 @@ HWY_INLINE RowBlocks<Real> row_blocks(const GradientRows& rows, Index row) {
 // 30-50 entries), so that a line arrives while the batch before it is computed. The consecutive points' rows lie one
 // after another, so one fixed distance serves every row; near the end the prefetches run past it (they never fault).
 constexpr std::ptrdiff_t kPrefetchBytes = 4096;
-// Asks for the lines of `bytes` bytes at kPrefetchBytes past p (one line for a single-precision block). The address
-// is formed as an integer: past the array's end a pointer may not point.
+// Asks for the lines of `bytes` bytes at kPrefetchBytes past p (one line for a single-precision block) into the L2,
+// not the L1 (locality 2: prefetcht1 on x86, pldl2keep on Arm). Fetched into the L1, the two streams' 8 KiB in flight
+// took a quarter of it from the node records the loops read at random: on a Zen 4 the kernel was 1.15-1.3x slower
+// (docs/performance.md, fourteenth section). The address is formed as an integer: past the array's end a pointer may
+// not point.
 template <std::size_t bytes>
 HWY_INLINE void prefetch_ahead(const void* p) {
+  constexpr int kReadOnly = 0, kIntoL2 = 2;
   const std::uintptr_t ahead = reinterpret_cast<std::uintptr_t>(p) + kPrefetchBytes;
-  for (std::size_t line = 0; line < bytes; line += 64) hwy::Prefetch(reinterpret_cast<const char*>(ahead + line));
+  for (std::size_t line = 0; line < bytes; line += 64)
+    __builtin_prefetch(reinterpret_cast<const char*>(ahead + line), kReadOnly, kIntoL2);
 }
 
 // kLanes gradient components of consecutive entries as doubles (single-precision rows are widened on the way in).
