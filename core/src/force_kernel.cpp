@@ -104,11 +104,11 @@ HWY_INLINE RowBlocks<Real> row_blocks(const GradientRows& rows, Index row) {
 // 30-50 entries), so that a line arrives while the batch before it is computed. The consecutive points' rows lie one
 // after another, so one fixed distance serves every row; near the end the prefetches run past it (they never fault).
 constexpr std::ptrdiff_t kPrefetchBytes = 4096;
-// Asks for the lines of `bytes` bytes at kPrefetchBytes past p (one line for a single-precision block) into the L2,
-// not the L1 (locality 2: prefetcht1 on x86, pldl2keep on Arm): into the L1, the kernel was 1.1-1.4x slower on a Zen 4
-// (docs/performance.md, fourteenth section), likely because the lines in flight then hold the L1's few miss buffers
-// and share it with the node records the loops read at random. The address is formed as an integer: past the array's
-// end a pointer may not point.
+// Asks for the lines of `bytes` bytes at kPrefetchBytes past p (one line for a single-precision block) into the L2, not
+// the L1 (locality 2: prefetcht1 on x86, pldl2keep on Arm): into the L1, the kernel was 1.1-1.4x slower on a Zen 4 (on
+// a Zen 3 no different; docs/performance.md, fourteenth and fifteenth sections), likely because the lines in flight
+// then hold the L1's few miss buffers and share it with the node records the loops read at random. The address is
+// formed as an integer: past the array's end a pointer may not point.
 template <std::size_t bytes>
 HWY_INLINE void prefetch_ahead(const void* p) {
   constexpr int kReadOnly = 0, kIntoL2 = 2;
