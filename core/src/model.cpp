@@ -5,10 +5,12 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 #include "force_kernel.hpp"
 #include "mtled/log.hpp"
@@ -36,6 +38,56 @@ Mat3 deformation_gradient_at(const GradientRows& rows, Index ip, const double* u
     F += Vec3(ui[0], ui[1], ui[2]) * rows.gradient(ip, k).transpose();
   }
   return F;
+}
+
+// The largest eigenvalue of the first elasticity tensor dP/dF (P = F S) at F, a 9 x 9 matrix symmetrised (a
+// hyperelastic law's is symmetric), by forward differences of the law's stress: the modulus that sets how fast the
+// point's stiffest wave travels in the reference configuration. The ten stresses in two of the law's batches; the
+// eigenvalue by power iteration from the volumetric direction, which the stiffest mode of a nearly incompressible
+// solid is close to (a Rayleigh quotient: never above the eigenvalue). 0 where the law refuses F or a perturbation.
+double largest_tangent_modulus(const Material& material, const Mat3& F) {
+  const double h = 1e-6 * std::max(1.0, F.cwiseAbs().maxCoeff());
+  std::array<StressBatch, 2> batches{};
+  for (int lane = 0; lane < 2 * StressBatch::kCapacity; ++lane) {
+    // Lanes 0-8: F + h e_c; lane 9: F; the rest F = I (a law may compute every lane).
+    StressBatch& batch = batches[static_cast<std::size_t>(lane / StressBatch::kCapacity)];
+    const int p = lane % StressBatch::kCapacity;
+    Mat3 m = lane <= 9 ? F : Mat3::Identity();
+    if (lane < 9) m(lane / 3, lane % 3) += h;
+    for (int c = 0; c < 9; ++c) batch.F[c][p] = m(c / 3, c % 3);
+  }
+  batches[0].count = StressBatch::kCapacity;
+  batches[1].count = 2;
+  for (StressBatch& batch : batches) material.stress_batch(batch);
+  auto first_piola = [&](int lane) -> std::optional<Mat3> {
+    const StressBatch& batch = batches[static_cast<std::size_t>(lane / StressBatch::kCapacity)];
+    const int p = lane % StressBatch::kCapacity;
+    if (!batch.admissible[p]) return std::nullopt;
+    Mat3 S;
+    for (int c = 0; c < 9; ++c) S(c / 3, c % 3) = batch.S[c][p];
+    return batch.deformation_gradient(p) * S;
+  };
+  const std::optional<Mat3> P = first_piola(9);
+  if (!P) return 0.0;
+  Eigen::Matrix<double, 9, 9> tangent;
+  for (int c = 0; c < 9; ++c) {
+    const std::optional<Mat3> perturbed = first_piola(c);
+    if (!perturbed) return 0.0;
+    const Mat3 dP = (*perturbed - *P) / h;
+    for (int r = 0; r < 9; ++r) tangent(r, c) = dP(r / 3, r % 3);
+  }
+  const Eigen::Matrix<double, 9, 9> symmetric = 0.5 * (tangent + tangent.transpose());
+  const Mat3 volumetric = F.inverse().transpose();
+  Eigen::Matrix<double, 9, 1> x;
+  for (int r = 0; r < 9; ++r) x[r] = volumetric(r / 3, r % 3);
+  double eigenvalue = 0.0;
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    x.normalize();
+    const Eigen::Matrix<double, 9, 1> y = symmetric * x;
+    eigenvalue = x.dot(y);
+    x = y;
+  }
+  return eigenvalue;
 }
 
 // Morton (Z-order) keys of the tets' centroids, 21 bits per axis of the mesh's bounding box: sorting by them puts
@@ -287,6 +339,21 @@ void Model::build_time_steps() {
     const double wave_speed = std::sqrt(material.p_wave_modulus() / material.density());
     ip_dt_[ip] = 2.0 / (wave_speed * std::sqrt(static_cast<double>(ip_rows_.size(ip)) * sum));
   }
+}
+
+std::vector<double> Model::ip_stiffening(std::span<const double> u) const {
+  std::vector<double> at_rest(materials_.size());
+  for (std::size_t m = 0; m < materials_.size(); ++m)
+    at_rest[m] = largest_tangent_modulus(*materials_[m], Mat3::Identity());
+  std::vector<double> ratio(static_cast<std::size_t>(integration_point_count()), 1.0);
+  team_->for_each_share(integration_point_count(), [&](Index begin, Index end) {
+    for (Index ip = begin; ip < end; ++ip) {
+      const double rest = at_rest[ip_material_[ip]];
+      const double now = largest_tangent_modulus(ip_material(ip), deformation_gradient_at(ip_rows_, ip, u.data()));
+      if (rest > 0.0 && now > rest) ratio[static_cast<std::size_t>(ip)] = now / rest;
+    }
+  });
+  return ratio;
 }
 
 void Model::build_integration_correction() {

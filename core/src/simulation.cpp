@@ -4,6 +4,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include "mtled/cpu_engine.hpp"
@@ -168,15 +169,38 @@ Simulation::~Simulation() = default;
 
 void Simulation::equalise_critical_steps() {
   const auto& dt = model_->ip_critical_time_steps();
-  const double target = *std::max_element(dt.begin(), dt.end());
-  std::vector<double> scale(dt.size());
-  for (std::size_t i = 0; i < dt.size(); ++i) scale[i] = dt[i] < target ? (target / dt[i]) * (target / dt[i]) : 1.0;
-  mass_ = model_->lumped_mass(scale);
-  engine_->set_mass(mass_);
+  const std::vector<double> scale = scale_masses({});
   double smallest = dt[0] * std::sqrt(scale[0]);
   for (std::size_t i = 0; i < dt.size(); ++i) smallest = std::min(smallest, dt[i] * std::sqrt(scale[i]));
   stable_time_step_ = smallest;
+}
+
+void Simulation::equalise_current_critical_steps() {
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<double> stiffening = model_->ip_stiffening(displacement());
+  scale_masses(stiffening);
+  const auto stiffer = std::count_if(stiffening.begin(), stiffening.end(), [](double s) { return s > 1.0; });
+  log().debug(
+      "step {}: masses scaled to the current stiffness in {:.3f} s: {} of {} integration points stiffer than "
+      "at rest, the most by {:.3g}x",
+      load_.step, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), stiffer,
+      stiffening.size(), *std::max_element(stiffening.begin(), stiffening.end()));
+}
+
+std::vector<double> Simulation::scale_masses(std::span<const double> stiffening) {
+  const auto& dt = model_->ip_critical_time_steps();
+  const double target = *std::max_element(dt.begin(), dt.end());
+  std::vector<double> scale(dt.size());
+  for (std::size_t i = 0; i < dt.size(); ++i) {
+    // A point's critical step at its current stiffness is dt / sqrt(stiffening): its density rises by the square of
+    // what brings that step up to the target.
+    const double now = stiffening.empty() ? dt[i] : dt[i] / std::sqrt(stiffening[i]);
+    scale[i] = now < target ? (target / now) * (target / now) : 1.0;
+  }
+  mass_ = model_->lumped_mass(scale);
+  engine_->set_mass(mass_);
   mass_changed_ = true;
+  return scale;
 }
 
 void Simulation::inadmissible(Index bad, std::span<const double> u) const {

@@ -62,6 +62,14 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     d.boolean("mass_scaling").defaults(true).doc(
         "scale the density per integration point so every point has the same critical time step (changes the "
         "path to the steady state, not the steady state)");
+    d.boolean("held_mass_scaling")
+        .defaults(true)
+        .doc(
+            "with mass_scaling, scale the masses again as each hold begins, to the body's current stiffness (each "
+            "integration point's largest tangent modulus dP/dF against its value at rest), so that the tissue a load "
+            "stiffened (the sleeve the needle shears) no longer holds the whole body's stable step down while it "
+            "relaxes; with the stable-step monitor's \"follow\" the step then rises to what the rest of the body "
+            "allows. Changes the path to the steady state, not the steady state");
     d.integer("relaxed_increments").unit("1").at_least(1).defaults(1).doc(
         "relax to the steady state at this many equally spaced loads (1/N, 2/N, ... of the full load, each reached "
         "along the load curve, held while the body relaxes), so that needle.csv and reactions.csv hold the forces "
@@ -103,6 +111,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
         converged_steps_(p.integer("converged_steps")),
         max_steps_(p.integer("max_steps")),
         mass_scaling_(p.boolean("mass_scaling")),
+        held_mass_scaling_(p.boolean("held_mass_scaling")),
         increments_(p.integer("relaxed_increments")),
         update_every_(p.integer("damping_update_steps")),
         held_damping_factor_(p.number("held_damping_factor")),
@@ -134,6 +143,10 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     const long n = system.step();
     // Held from this step on when the ramp had reached the increment's end before it (the ramp's steps never use it).
     const double gamma = held() ? held_stiffness_damping_ : 0.0;
+    if (held() && mass_scaling_ && held_mass_scaling_ && masses_scaled_for_ != relaxed_) {
+      system.equalise_current_critical_steps();
+      masses_scaled_for_ = relaxed_;
+    }
     const bool estimate = n >= 2 && n % update_every_ == 0;
     const IncrementSums increment = system.evaluate_forces(estimate);
     if (estimate) estimate_frequency(increment);
@@ -181,6 +194,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     r.relaxation =
         RelaxationReport{converged_, error_bound_, relative_error_bound(), tolerance_, estimated_frequency_, rho_};
     r.settings = {{"mass_scaling", mass_scaling_},
+                  {"held_mass_scaling", held_mass_scaling_},
                   {"load_steps", load_steps_},
                   {"relaxed_increments", increments_},
                   {"held_damping_factor", held_damping_factor_},
@@ -259,6 +273,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   double tolerance_;
   long converged_steps_, max_steps_;
   bool mass_scaling_;
+  bool held_mass_scaling_;
   long increments_;
   long update_every_;
   double held_damping_factor_;
@@ -273,6 +288,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   long below_ = 0;
   long ramp_step_ = 0;  // steps of the load ramp taken (the ramp holds while an increment relaxes)
   long relaxed_ = 0;    // increments relaxed to the steady state
+  long masses_scaled_for_ = -1;  // the increment whose hold last scaled the masses to the current stiffness
   bool converged_ = false;
 };
 

@@ -1,8 +1,11 @@
 // The meshless model and the essential-boundary-condition projection, on irregular clouds, through the real
 // plugins: mass, forces, thread independence, discrete energy consistency, constraints to round-off.
+#include "mtled/model.hpp"
+
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <fstream>
 #include <iostream>
@@ -12,7 +15,6 @@
 #include <thread>
 
 #include "mtled/constraints.hpp"
-#include "mtled/model.hpp"
 #include "simd_targets.hpp"
 #include "test_support.hpp"
 
@@ -585,6 +587,49 @@ TEST(Model, StableTimeStepScalesWithNodeSpacing) {
   // And it is below the dilatational wave's transit time across one cell.
   const double c = std::sqrt((2.0 / kD + 4.0 / 3.0 * kMu) / 1000.0);
   EXPECT_LT(min_of(*coarse), 0.01 / 4 / c);
+}
+
+// ip_stiffening against an independent computation: under an affine field (reproduced exactly by the shape functions)
+// every point has the same F0, and its stiffening is the largest eigenvalue of the Hessian of the strain energy
+// d2W/dF2 at F0 over that at F = I, here by central second differences of W (the model's from forward differences of
+// the stress, by power iteration). Those forward differences (step 1e-6) are off by about 1e-6 of the eigenvalue (3e-7
+// measured), the energy's second differences by about 1e-8: 1e-5 allows for both.
+TEST(Model, StiffeningIsTheLargestTangentModulusOverItsValueAtRest) {
+  for (const std::string law : {"neo_hookean", "ogden"}) {
+    const auto model = make_model("mls", 0.25, 4, law);
+    Mat3 F0;
+    F0 << 1.0, 1.0, 0.0, 0.0, 1.05, 0.1, 0.0, 0.0, 0.98;  // a shear of 1 and a small volume change
+    std::vector<double> u(3 * static_cast<std::size_t>(model->node_count()));
+    for (Index i = 0; i < model->node_count(); ++i) {
+      const Vec3 x = (F0 - Mat3::Identity()) * model->nodes()[i];
+      for (int c = 0; c < 3; ++c) u[3 * static_cast<std::size_t>(i) + c] = x[c];
+    }
+    const Material& material = model->ip_material(0);
+    auto largest_hessian_eigenvalue = [&](const Mat3& F) {
+      constexpr double kDelta = 1e-4;
+      Eigen::Matrix<double, 9, 9> hessian;
+      auto energy = [&](int a, double da, int b, double db) {
+        Mat3 G = F;
+        G(a / 3, a % 3) += da;
+        G(b / 3, b % 3) += db;
+        return material.energy(G);
+      };
+      for (int a = 0; a < 9; ++a)
+        for (int b = 0; b < 9; ++b)
+          hessian(a, b) = (energy(a, kDelta, b, kDelta) - energy(a, kDelta, b, -kDelta) -
+                           energy(a, -kDelta, b, kDelta) + energy(a, -kDelta, b, -kDelta)) /
+                          (4.0 * kDelta * kDelta);
+      return Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>>(hessian).eigenvalues()[8];
+    };
+    const double expected = largest_hessian_eigenvalue(F0) / largest_hessian_eigenvalue(Mat3::Identity());
+    EXPECT_GT(expected, 1.2) << law;  // a deformation that stiffens the law measurably
+    const std::vector<double> stiffening = model->ip_stiffening(u);
+    ASSERT_EQ(stiffening.size(), static_cast<std::size_t>(model->integration_point_count()));
+    for (std::size_t ip = 0; ip < stiffening.size(); ++ip)
+      ASSERT_NEAR(stiffening[ip], expected, 1e-5 * expected) << law << " point " << ip;
+    const std::vector<double> at_rest = model->ip_stiffening(std::vector<double>(u.size(), 0.0));
+    for (double s : at_rest) ASSERT_EQ(s, 1.0) << law;
+  }
 }
 
 class ConstraintsTest : public ::testing::TestWithParam<std::string> {};

@@ -91,6 +91,10 @@ class Model {
   // Critical time step of each integration point for the unscaled density (Joldes et al. 2012):
   // dt = 2 / (c sqrt(n sum_I |grad N_I|^2)), c = sqrt((lambda + 2 mu) / rho).
   const std::vector<double>& ip_critical_time_steps() const { return ip_dt_; }
+  // How much stiffer each integration point's material is at the displacement u than at rest: the largest eigenvalue
+  // of its tangent dP/dF at u over that at F = I, at least 1 (a softer point, or one whose F the law refuses, gets 1).
+  // Its critical step at u is about ip_critical_time_steps() / sqrt(this). Parallel on the model's team.
+  std::vector<double> ip_stiffening(std::span<const double> u) const;
 
   // The correction of node I's test-function gradient at integration point ip, xi_I - mean over ip's support of
   // xi_J (zero when consistent integration is off).

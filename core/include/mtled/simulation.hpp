@@ -38,6 +38,7 @@ class Simulation final : public DiscreteSystem, private StepControl {
   double stable_time_step() const override { return stable_time_step_; }
   // Raises the density at each integration point so that its critical step is the largest one's.
   void equalise_critical_steps() override;
+  void equalise_current_critical_steps() override;
   // Throws InstabilityError naming the integration point when F is inadmissible (J <= 0).
   void internal_forces(std::span<const double> u, std::span<double> f) override;
   bool has_external_forces() const override { return !force_sets_.empty(); }
@@ -78,6 +79,9 @@ class Simulation final : public DiscreteSystem, private StepControl {
   json monitor_reports() const;
 
  private:
+  // The masses for every integration point at the setup's largest critical step, each point's step taken at its
+  // stiffening (empty: as at rest); returns the density scales.
+  std::vector<double> scale_masses(std::span<const double> stiffening);
   void build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
                    std::vector<std::shared_ptr<const Material>> materials, std::vector<int> cell_groups);
   void build_drivers(const Scene& scene, PluginCatalog& catalog);

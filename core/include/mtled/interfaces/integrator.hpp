@@ -62,6 +62,11 @@ class DiscreteSystem {
   // Mass scaling, valid for steady-state solutions only: raises the masses so that every part of the body has
   // the critical step of its slowest part; stable_time_step() then returns that step.
   virtual void equalise_critical_steps() = 0;
+  // Mass scaling again at the current state, after equalise_critical_steps(): raises the masses where the body has
+  // stiffened since the setup, so that each part regains the critical step that call gave it (stable_time_step()
+  // unchanged). For a steady-state integrator while it holds its loads. The default does nothing (a system whose
+  // stiffness does not change with its state).
+  virtual void equalise_current_critical_steps() {}
 
   // f = f_int(u). Throws InstabilityError when u is inadmissible (inverted material).
   virtual void internal_forces(std::span<const double> u, std::span<double> f) = 0;
