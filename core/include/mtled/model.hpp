@@ -93,7 +93,8 @@ class Model {
   const std::vector<double>& ip_critical_time_steps() const { return ip_dt_; }
   // How much stiffer each integration point's material is at the displacement u than at rest: the largest eigenvalue
   // of its tangent dP/dF at u over that at F = I, at least 1 (a softer point, or one whose F the law refuses, gets 1).
-  // Its critical step at u is about ip_critical_time_steps() / sqrt(this). Parallel on the model's team.
+  // Its critical step at u is about ip_critical_time_steps() / sqrt(this). At each point's own F (a volumetric
+  // treatment's average is left out: this only sizes masses). Parallel on the model's team.
   std::vector<double> ip_stiffening(std::span<const double> u) const;
 
   // The correction of node I's test-function gradient at integration point ip, xi_I - mean over ip's support of
