@@ -54,7 +54,7 @@ double largest_tangent_modulus(const Material& material, const Mat3& F) {
     const int p = lane % StressBatch::kCapacity;
     Mat3 m = lane <= 9 ? F : Mat3::Identity();
     if (lane < 9) m(lane / 3, lane % 3) += h;
-    for (int c = 0; c < 9; ++c) batch.F[c][p] = m(c / 3, c % 3);
+    batch.set_deformation_gradient(p, m);
   }
   batches[0].count = StressBatch::kCapacity;
   batches[1].count = 2;
@@ -63,9 +63,7 @@ double largest_tangent_modulus(const Material& material, const Mat3& F) {
     const StressBatch& batch = batches[static_cast<std::size_t>(lane / StressBatch::kCapacity)];
     const int p = lane % StressBatch::kCapacity;
     if (!batch.admissible[p]) return std::nullopt;
-    Mat3 S;
-    for (int c = 0; c < 9; ++c) S(c / 3, c % 3) = batch.S[c][p];
-    return batch.deformation_gradient(p) * S;
+    return batch.deformation_gradient(p) * batch.stress(p);
   };
   const std::optional<Mat3> P = first_piola(9);
   if (!P) return 0.0;

@@ -183,7 +183,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
       for (int p = 0; p < StressBatch::kCapacity; ++p) {
         r[p] = p < count ? std::cbrt(J_bar_[first + p] / J_[first + p]) : 1.0;
         const Mat3 F_bar = p < count ? Mat3(r[p] * F_[first + p]) : Mat3::Identity();  // spare lanes: F = I
-        for (int c = 0; c < 9; ++c) batch.F[c][p] = F_bar(c / 3, c % 3);
+        batch.set_deformation_gradient(p, F_bar);
       }
       material.stress_batch(batch);
       for (int p = 0; p < count; ++p) {
@@ -194,8 +194,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
           stress_[ip].setZero();
           continue;
         }
-        Mat3 S;
-        for (int c = 0; c < 9; ++c) S(c / 3, c % 3) = batch.S[c][p];
+        const Mat3 S = batch.stress(p);
         const Mat3& F = F_[ip];
         const Mat3 F_bar = r[p] * F;
         const Mat3 P_bar = F_bar * S;

@@ -363,7 +363,7 @@ TEST_P(MaterialConformance, BatchedStressEqualsOnePointStress) {
       batch.count = static_cast<int>(std::min<std::size_t>(StressBatch::kCapacity, deformations.size() - first));
       for (int p = 0; p < StressBatch::kCapacity; ++p) {
         const Mat3 F = p < batch.count ? deformations[first + p] : Mat3::Identity();
-        for (int c = 0; c < 9; ++c) batch.F[c][p] = F(c / 3, c % 3);
+        batch.set_deformation_gradient(p, F);
       }
       material->stress_batch(batch);
       for (int p = 0; p < batch.count; ++p) {
@@ -373,8 +373,7 @@ TEST_P(MaterialConformance, BatchedStressEqualsOnePointStress) {
         const bool admissible = material->stress(F, S);
         ASSERT_EQ(batch.admissible[p], admissible);
         if (!admissible) continue;
-        Mat3 S_batch;
-        for (int c = 0; c < 9; ++c) S_batch(c / 3, c % 3) = batch.S[c][p];
+        const Mat3 S_batch = batch.stress(p);
         const Vec3 singular = Eigen::JacobiSVD<Mat3>(F).singularValues();
         const double condition = std::pow(singular.maxCoeff() / singular.minCoeff(), 2);
         const double error = (S_batch - S).cwiseAbs().maxCoeff() / std::max(M, S.cwiseAbs().maxCoeff());

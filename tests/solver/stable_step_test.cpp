@@ -4,10 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <span>
 
 #include "mtled/errors.hpp"
-#include "mtled/scene.hpp"
 #include "mtled/monitors/scene_monitors.hpp"
+#include "mtled/scene.hpp"
 #include "mtled/simulation.hpp"
 #include "test_support.hpp"
 
@@ -33,6 +34,19 @@ json cube_scene(const json& integrator, const json& monitors, bool loaded, doubl
 
 Scene make_scene(const json& scene) {
   return validate_scene(parse_scene(scene.dump(), "stable_step_test.json"), test::catalog(), {monitors_section()});
+}
+
+// The largest |u| of a reference run and the largest difference of another run from it, over every unknown.
+struct SteadyStateDifference {
+  double largest = 0.0, difference = 0.0;
+};
+SteadyStateDifference difference_from(std::span<const double> u, std::span<const double> reference) {
+  SteadyStateDifference d;
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    d.largest = std::max(d.largest, std::abs(reference[i]));
+    d.difference = std::max(d.difference, std::abs(u[i] - reference[i]));
+  }
+  return d;
 }
 
 // 2 / sqrt(lambda_max) of K v = lambda M v at u = 0, K by forward differences of the internal forces, one
@@ -224,11 +238,7 @@ TEST(StableStepMonitor, AdaptsTheStepWhereAFixedStepBlowsUp) {
   Simulation reference(small, test::catalog());
   add_scene_monitors(reference, small);
   reference.run();
-  double largest = 0.0, difference = 0.0;
-  for (std::size_t i = 0; i < reference.displacement().size(); ++i) {
-    largest = std::max(largest, std::abs(reference.displacement()[i]));
-    difference = std::max(difference, std::abs(adapted.displacement()[i] - reference.displacement()[i]));
-  }
+  const auto [largest, difference] = difference_from(adapted.displacement(), reference.displacement());
   // Each relaxation stops within 1e-5 of the largest displacement of its steady state (with margin: 10x).
   EXPECT_LT(difference, 1e-4 * largest);
   RecordProperty("difference_over_largest", std::to_string(difference / largest));
@@ -265,11 +275,7 @@ TEST(StableStepMonitor, MassesScaledToTheHeldStateKeepThePerPointBound) {
   RecordProperty("exact_over_bound_unscaled", std::to_string(exact_unscaled / bound));
   EXPECT_LT(exact_unscaled, 0.9 * bound);
   EXPECT_GE(exact_scaled, bound);
-  double largest = 0.0, difference = 0.0;
-  for (std::size_t i = 0; i < unscaled->displacement().size(); ++i) {
-    largest = std::max(largest, std::abs(unscaled->displacement()[i]));
-    difference = std::max(difference, std::abs(scaled->displacement()[i] - unscaled->displacement()[i]));
-  }
+  const auto [largest, difference] = difference_from(scaled->displacement(), unscaled->displacement());
   // Each relaxation stops within 1e-5 of the largest displacement of the same steady state (with margin: 10x).
   EXPECT_LT(difference, 1e-4 * largest);
   RecordProperty("difference_over_largest", std::to_string(difference / largest));
@@ -339,11 +345,7 @@ TEST(StableStepMonitor, FollowsTheStableStepUpWhileTheLoadsAreHeld) {
   EXPECT_LT(follow.steps.size(), adapt.steps.size());
   RecordProperty("steps_adapt", std::to_string(adapt.steps.size()));
   RecordProperty("steps_follow", std::to_string(follow.steps.size()));
-  double largest = 0.0, difference = 0.0;
-  for (std::size_t i = 0; i < adapt.u.size(); ++i) {
-    largest = std::max(largest, std::abs(adapt.u[i]));
-    difference = std::max(difference, std::abs(follow.u[i] - adapt.u[i]));
-  }
+  const auto [largest, difference] = difference_from(follow.u, adapt.u);
   // Each relaxation stops within 1e-5 of the largest displacement of the same steady state (with margin: 10x).
   EXPECT_LT(difference, 1e-4 * largest);
   RecordProperty("difference_over_largest", std::to_string(difference / largest));

@@ -19,6 +19,14 @@ struct StressBatch {
     for (int c = 0; c < 9; ++c) m(c / 3, c % 3) = F[c][p];
     return m;
   }
+  void set_deformation_gradient(int p, const Mat3& m) {
+    for (int c = 0; c < 9; ++c) F[c][p] = m(c / 3, c % 3);
+  }
+  Mat3 stress(int p) const {
+    Mat3 m;
+    for (int c = 0; c < 9; ++c) m(c / 3, c % 3) = S[c][p];
+    return m;
+  }
   void set_stress(int p, const Mat3& m) {
     for (int c = 0; c < 9; ++c) S[c][p] = m(c / 3, c % 3);
   }
