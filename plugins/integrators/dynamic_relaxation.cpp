@@ -148,10 +148,17 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
       masses_scaled_for_ = relaxed_;
     }
     const bool estimate = n >= 2 && n % update_every_ == 0;
-    const IncrementSums increment = system.evaluate_forces(estimate);
+    IncrementSums increment;
+    try {
+      increment = system.evaluate_forces(estimate);
+    } catch (const InstabilityError& e) {
+      if (!load_moved_last_step_ || e.diagnostic().what != "inverted_material") throw;
+      throw with_ramp_advice(e.diagnostic());
+    }
     if (estimate) estimate_frequency(increment);
     // The ramp advances until the current increment's end, then holds while the body relaxes.
-    if (!held()) ++ramp_step_;
+    load_moved_last_step_ = !held();
+    if (load_moved_last_step_) ++ramp_step_;
     const double fraction = increment_load_fraction();
     const StepSums sums = system.advance({alpha_, beta_ * increment_scale, gamma},
                                          time_origin_ + static_cast<double>(n + 1 - step_origin_) * h_, fraction);
@@ -203,6 +210,17 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   }
 
  private:
+  // Material inverted in a state the ramp's last step made: the load per step can outrun the body (the brain phantom
+  // over 1,000 load steps inverts in the sleeve at ramp step 979 and runs through over 2,000), so say how to slow the
+  // ramp.
+  InstabilityError with_ramp_advice(Diagnostic d) const {
+    d.detail += fmt::format(
+        "; it happened while applying the load (after {} of /integrator/load_steps = {}), whose "
+        "steps may outrun the body: raise load_steps (for example to {}, more if it inverts again)",
+        ramp_step_, load_steps_, 2 * load_steps_);
+    return InstabilityError(std::move(d));
+  }
+
   // The ramp step at which increment k (0-based) begins; increment_end() is where the current one ends.
   long increment_start(long k) const {
     return static_cast<long>(std::llround(static_cast<double>(load_steps_) * static_cast<double>(k) /
@@ -287,6 +305,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   double error_bound_ = INFINITY, largest_displacement_ = 0.0;
   long below_ = 0;
   long ramp_step_ = 0;  // steps of the load ramp taken (the ramp holds while an increment relaxes)
+  bool load_moved_last_step_ = false;  // the state the next forces are evaluated in was made by a ramp step
   long relaxed_ = 0;    // increments relaxed to the steady state
   long masses_scaled_for_ = -1;  // the increment whose hold last scaled the masses to the current stiffness
   bool converged_ = false;

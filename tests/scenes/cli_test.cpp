@@ -269,6 +269,31 @@ TEST(Cli, TimeStepTenTimesTheStableOneIsDetected) {
   }
 }
 
+// A compression of 40% applied in two load steps moves the top face 2 mm a step, more than the cloud's node spacing
+// (300 nodes in a 10 mm cube: about 1.5 mm): the tets under it invert while the ramp runs. The stop names the ramp's
+// setting and how to slow it, and the same compression over 100 load steps (0.04 mm a step) runs through.
+TEST(Cli, AnInversionWhileLoadingNamesTheRampToSlow) {
+  const auto compressed = [](long load_steps) {
+    return [load_steps](json& s) {
+      s["boundaries"][1]["displacement"] = json::array({0.0, 0.0, -0.004});
+      s["integrator"]["load_steps"] = load_steps;
+    };
+  };
+  const auto fast = variant("ramp-too-fast", compressed(2));
+  const fs::path out = fast.parent_path() / "out";
+  auto result = test::run_mtled({"run", fast.string(), "-o", out.string()});
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  const json d = test::read_json(out / "summary.json")["diagnostic"];
+  EXPECT_EQ(d["what"], "inverted_material") << d.dump();
+  expect_contains(d["detail"].get<std::string>(), "/integrator/load_steps = 2");
+  expect_contains(d["detail"].get<std::string>(), "raise load_steps (for example to 4");
+  EXPECT_FALSE(fs::exists(out / "result.vtu"));
+
+  const auto slow = variant("ramp-slow", compressed(100));
+  result = test::run_mtled({"run", slow.string(), "-o", (slow.parent_path() / "out").string()});
+  EXPECT_EQ(result.exit_code, 0) << result.output;
+}
+
 // A slower blow-up (a factor of 4) under a load of 10 nm: each step multiplies the unstable mode's amplitude by
 // a few, so it takes a couple of dozen steps to invert a tet. The kinetic energy passes ten times the work the
 // prescribed motion has done long before: the energy monitor stops the run first. (The stable-step monitor,
