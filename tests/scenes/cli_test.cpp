@@ -269,8 +269,8 @@ TEST(Cli, TimeStepTenTimesTheStableOneIsDetected) {
   }
 }
 
-// A compression of 40% applied in two load steps moves the top face 2 mm a step, more than the cloud's node spacing
-// (300 nodes in a 10 mm cube: about 1.5 mm): the tets under it invert while the ramp runs. The stop names the ramp's
+// A compression of 40% applied in two load steps moves the top face 2 mm a step, more than the cloud's mesh size
+// (1.93 mm: 335 nodes in the 10 mm cube): the tets under it invert while the ramp runs. The stop names the ramp's
 // setting and how to slow it, and the same compression over 100 load steps (0.04 mm a step) runs through.
 TEST(Cli, AnInversionWhileLoadingNamesTheRampToSlow) {
   const auto compressed = [](long load_steps) {
