@@ -46,7 +46,15 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
   void step(DiscreteSystem& system) override {
     double alpha = alpha_, beta = beta_;
     if (const double stable = system.stable_time_step(); stable != stable_) replan(system, stable, alpha, beta);
-    system.evaluate_forces(false);
+    try {
+      system.evaluate_forces(false);
+    } catch (const InstabilityError& e) {
+      // The state was made by a step that moved the load when that step began before the end of the loading time.
+      rethrow_with_ramp_advice(
+          e, system.step() > 0 && system.time() - h_ < load_time_,
+          fmt::format("t = {:.4g} s of /integrator/load_time = {:.4g} s", system.time(), load_time_), "load_time",
+          fmt::format("{:.4g} s", 2.0 * load_time_));
+    }
     const double t = time_origin_ + static_cast<double>(system.step() + 1 - step_origin_) * h_;
     system.advance({alpha, beta, 0.0}, t, load_fraction(curve_, t / load_time_));
   }

@@ -152,8 +152,9 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     try {
       increment = system.evaluate_forces(estimate);
     } catch (const InstabilityError& e) {
-      if (!load_moved_last_step_ || e.diagnostic().what != "inverted_material") throw;
-      throw with_ramp_advice(e.diagnostic());
+      rethrow_with_ramp_advice(e, load_moved_last_step_,
+                               fmt::format("after {} of /integrator/load_steps = {}", ramp_step_, load_steps_),
+                               "load_steps", std::to_string(2 * load_steps_));
     }
     if (estimate) estimate_frequency(increment);
     // The ramp advances until the current increment's end, then holds while the body relaxes.
@@ -210,17 +211,6 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   }
 
  private:
-  // Material inverted in a state the ramp's last step made: the load per step can outrun the body (the brain phantom
-  // over 1,000 load steps inverts in the sleeve at ramp step 979 and runs through over 2,000), so say how to slow the
-  // ramp.
-  InstabilityError with_ramp_advice(Diagnostic d) const {
-    d.detail += fmt::format(
-        "; it happened while applying the load (after {} of /integrator/load_steps = {}), whose "
-        "steps may outrun the body: raise load_steps (for example to {}, more if it inverts again)",
-        ramp_step_, load_steps_, 2 * load_steps_);
-    return InstabilityError(std::move(d));
-  }
-
   // The ramp step at which increment k (0-based) begins; increment_end() is where the current one ends.
   long increment_start(long k) const {
     return static_cast<long>(std::llround(static_cast<double>(load_steps_) * static_cast<double>(k) /

@@ -1,10 +1,13 @@
 #pragma once
-// How the applied load (prescribed displacements, needle depth) grows from 0 to 1 over the loading time.
-// "smooth" is the quintic 10x^3 - 15x^4 + 6x^5: zero velocity and acceleration at both ends, so loading
-// starts and stops without exciting the high modes (the quintic "smoothstep" ramp).
+// How the applied load (prescribed displacements, needle depth) grows from 0 to 1 over the loading time, and what a
+// stop while it grows advises. "smooth" is the quintic 10x^3 - 15x^4 + 6x^5: zero velocity and acceleration at both
+// ends, so loading starts and stops without exciting the high modes (the quintic "smoothstep" ramp).
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <string>
 
+#include "mtled/errors.hpp"
 #include "mtled/parameters.hpp"
 
 namespace mtled {
@@ -27,6 +30,21 @@ inline double load_fraction(LoadCurve curve, double x) {
   x = std::clamp(x, 0.0, 1.0);
   if (curve == LoadCurve::linear) return x;
   return x * x * x * (10.0 + x * (-15.0 + 6.0 * x));
+}
+
+// Called in a catch block for an instability found while evaluating the forces. When the material inverted in a state
+// a loading step made (`loading`), the load may have moved faster than the body can follow (the brain phantom's needle
+// over 1,000 load steps inverts the sleeve at step 979 and runs through over 2,000): the error is thrown again with
+// `where` the ramp stood and which `setting` to raise (`example`: twice its value). Otherwise it is rethrown as it was.
+[[noreturn]] inline void rethrow_with_ramp_advice(const InstabilityError& error, bool loading, const std::string& where,
+                                                  const std::string& setting, const std::string& example) {
+  if (!loading || error.diagnostic().what != "inverted_material") throw;
+  Diagnostic d = error.diagnostic();
+  d.detail += fmt::format(
+      "; it happened while applying the load ({}), whose steps may outrun the body: raise {} (for "
+      "example to {}, more if it inverts again)",
+      where, setting, example);
+  throw InstabilityError(std::move(d));
 }
 
 }  // namespace mtled

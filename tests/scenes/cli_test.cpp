@@ -271,27 +271,48 @@ TEST(Cli, TimeStepTenTimesTheStableOneIsDetected) {
 
 // A compression of 40% applied in two load steps moves the top face 2 mm a step, more than the cloud's mesh size
 // (1.93 mm: 335 nodes in the 10 mm cube): the tets under it invert while the ramp runs. The stop names the ramp's
-// setting and how to slow it, and the same compression over 100 load steps (0.04 mm a step) runs through.
-TEST(Cli, AnInversionWhileLoadingNamesTheRampToSlow) {
-  const auto compressed = [](long load_steps) {
-    return [load_steps](json& s) {
+// setting and how to slow it, and the same compression over 100 load steps (0.04 mm a step) runs through. Central
+// differences alike: loaded over 0.3 ms (about 5 steps of 67 us) it inverts and says to raise load_time; over 0.2 s
+// it runs through.
+void expect_ramp_advice(const std::string& name, const json& fast, const json& slow, const std::string& advice) {
+  const auto compressed = [](const json& integrator) {
+    return [integrator](json& s) {
       s["boundaries"][1]["displacement"] = json::array({0.0, 0.0, -0.004});
-      s["integrator"]["load_steps"] = load_steps;
+      s["integrator"] = integrator;
     };
   };
-  const auto fast = variant("ramp-too-fast", compressed(2));
-  const fs::path out = fast.parent_path() / "out";
-  auto result = test::run_mtled({"run", fast.string(), "-o", out.string()});
+  const auto fast_file = variant(name + "-too-fast", compressed(fast));
+  const fs::path out = fast_file.parent_path() / "out";
+  auto result = test::run_mtled({"run", fast_file.string(), "-o", out.string()});
   EXPECT_EQ(result.exit_code, 3) << result.output;
   const json d = test::read_json(out / "summary.json")["diagnostic"];
   EXPECT_EQ(d["what"], "inverted_material") << d.dump();
-  expect_contains(d["detail"].get<std::string>(), "/integrator/load_steps = 2");
-  expect_contains(d["detail"].get<std::string>(), "raise load_steps (for example to 4");
+  expect_contains(d["detail"].get<std::string>(), advice);
   EXPECT_FALSE(fs::exists(out / "result.vtu"));
 
-  const auto slow = variant("ramp-slow", compressed(100));
-  result = test::run_mtled({"run", slow.string(), "-o", (slow.parent_path() / "out").string()});
+  const auto slow_file = variant(name + "-slow", compressed(slow));
+  result = test::run_mtled({"run", slow_file.string(), "-o", (slow_file.parent_path() / "out").string()});
   EXPECT_EQ(result.exit_code, 0) << result.output;
+}
+
+TEST(Cli, AnInversionWhileLoadingNamesTheRampToSlow) {
+  const json relaxation = {{"type", "dynamic_relaxation"}, {"tolerance", 1e-5}};
+  json fast = relaxation, slow = relaxation;
+  fast["load_steps"] = 2;
+  slow["load_steps"] = 100;
+  expect_ramp_advice("dr", fast, slow,
+                     "after 1 of /integrator/load_steps = 2), whose steps may outrun the body: raise load_steps (for "
+                     "example to 4");
+  const json dynamics = {{"type", "central_difference"}, {"damping", 60.0}};
+  fast = dynamics;
+  slow = dynamics;
+  fast["duration"] = 0.01;
+  fast["load_time"] = 0.0003;
+  slow["duration"] = 0.3;
+  slow["load_time"] = 0.2;
+  expect_ramp_advice("cd", fast, slow,
+                     "of /integrator/load_time = 0.0003 s), whose steps may outrun the body: raise "
+                     "load_time (for example to 0.0006 s");
 }
 
 // A slower blow-up (a factor of 4) under a load of 10 nm: each step multiplies the unstable mode's amplitude by
