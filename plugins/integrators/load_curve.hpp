@@ -35,14 +35,16 @@ inline double load_fraction(LoadCurve curve, double x) {
 // Called in a catch block for an instability found while evaluating the forces. When the material inverted in a state
 // a loading step made (`loading`), the load may have moved faster than the body can follow (the brain phantom's needle
 // over 1,000 load steps inverts the sleeve at step 979 and runs through over 2,000): the error is thrown again with
-// `where` the ramp stood and which `setting` to raise (`example`: twice its value). Otherwise it is rethrown as it was.
+// `where` the ramp stood and which `setting` to raise (`example`: twice its value). A fold the deformation itself makes
+// (docs/validation.md's graded compression, its free side folding onto the platen) does not go away with a slower
+// ramp, and the advice says so too. Otherwise the error is rethrown as it was.
 [[noreturn]] inline void rethrow_with_ramp_advice(const InstabilityError& error, bool loading, const std::string& where,
                                                   const std::string& setting, const std::string& example) {
   if (!loading || error.diagnostic().what != "inverted_material") throw;
   Diagnostic d = error.diagnostic();
   d.detail += fmt::format(
-      "; it happened while applying the load ({}), whose steps may outrun the body: raise {} (for "
-      "example to {}, more if it inverts again)",
+      "; it happened while applying the load ({}), whose steps may outrun the body: raise {} (for example to {}); if "
+      "it inverts again at the same load, the deformation itself folds the material there and no slower ramp helps",
       where, setting, example);
   throw InstabilityError(std::move(d));
 }
