@@ -23,6 +23,18 @@ fs::path variant(const std::string& name, const std::function<void(json&)>& chan
   return file;
 }
 
+// Runs the scene `file` into the folder "out" beside it and expects a detected instability: exit 3, summary.json's
+// status "unstable", no result.vtu. Returns summary.json.
+json run_expecting_unstable_stop(const fs::path& file) {
+  const fs::path out = file.parent_path() / "out";
+  const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  const json summary = test::read_json(out / "summary.json");
+  EXPECT_EQ(summary["status"], "unstable");
+  EXPECT_FALSE(fs::exists(out / "result.vtu"));
+  return summary;
+}
+
 void expect_contains(const std::string& text, const std::string& part) {
   EXPECT_NE(text.find(part), std::string::npos) << "expected \"" << part << "\" in:\n" << text;
 }
@@ -235,11 +247,7 @@ void expect_detected_blow_up(const std::string& name, const json& integrator, bo
     s["integrator"] = integrator;
     s["monitors"] = stable_step_monitor ? json{{"stable_step", "stop"}} : json{{"stable_step_every_steps", 0}};
   });
-  const fs::path out = file.parent_path() / "out";
-  const auto result = test::run_mtled({"run", file.string(), "-o", out.string()});
-  EXPECT_EQ(result.exit_code, 3) << result.output;
-  const json summary = test::read_json(out / "summary.json");
-  EXPECT_EQ(summary["status"], "unstable");
+  const json summary = run_expecting_unstable_stop(file);
   const json& d = summary["diagnostic"];
   if (stable_step_monitor) {
     EXPECT_EQ(d["what"], "time_step_above_stable") << d.dump();
@@ -254,8 +262,7 @@ void expect_detected_blow_up(const std::string& name, const json& integrator, bo
   }
   EXPECT_FALSE(d["where"].empty());
   EXPECT_TRUE(d["where"][0].contains("coordinates_m")) << d.dump();
-  EXPECT_FALSE(fs::exists(out / "result.vtu"));
-  EXPECT_TRUE(fs::exists(out / "last_good_state.vtu"));
+  EXPECT_TRUE(fs::exists(file.parent_path() / "out" / "last_good_state.vtu"));
 }
 
 TEST(Cli, TimeStepTenTimesTheStableOneIsDetected) {
@@ -281,17 +288,12 @@ void expect_ramp_advice(const std::string& name, const json& fast, const json& s
       s["integrator"] = integrator;
     };
   };
-  const auto fast_file = variant(name + "-too-fast", compressed(fast));
-  const fs::path out = fast_file.parent_path() / "out";
-  auto result = test::run_mtled({"run", fast_file.string(), "-o", out.string()});
-  EXPECT_EQ(result.exit_code, 3) << result.output;
-  const json d = test::read_json(out / "summary.json")["diagnostic"];
+  const json d = run_expecting_unstable_stop(variant(name + "-too-fast", compressed(fast)))["diagnostic"];
   EXPECT_EQ(d["what"], "inverted_material") << d.dump();
   expect_contains(d["detail"].get<std::string>(), advice);
-  EXPECT_FALSE(fs::exists(out / "result.vtu"));
 
   const auto slow_file = variant(name + "-slow", compressed(slow));
-  result = test::run_mtled({"run", slow_file.string(), "-o", (slow_file.parent_path() / "out").string()});
+  const auto result = test::run_mtled({"run", slow_file.string(), "-o", (slow_file.parent_path() / "out").string()});
   EXPECT_EQ(result.exit_code, 0) << result.output;
 }
 
@@ -413,16 +415,12 @@ TEST(Cli, MaterialFoldedBetweenIntegrationPointsIsReported) {
     });
   };
   auto file = pushed("stop");
-  auto result = test::run_mtled({"run", file.string(), "-o", (file.parent_path() / "out").string()});
-  EXPECT_EQ(result.exit_code, 3) << result.output;
-  json summary = test::read_json(file.parent_path() / "out" / "summary.json");
-  EXPECT_EQ(summary["status"], "unstable");
+  json summary = run_expecting_unstable_stop(file);
   EXPECT_EQ(summary["diagnostic"]["what"], "inverted_between_points") << summary["diagnostic"].dump();
   EXPECT_TRUE(summary["diagnostic"]["where"][0].contains("node")) << summary["diagnostic"].dump();
-  EXPECT_FALSE(fs::exists(file.parent_path() / "out" / "result.vtu"));
 
   file = pushed("warn");
-  result = test::run_mtled({"run", file.string(), "-o", (file.parent_path() / "out").string()});
+  auto result = test::run_mtled({"run", file.string(), "-o", (file.parent_path() / "out").string()});
   EXPECT_EQ(result.exit_code, 0) << result.output;
   expect_contains(result.output, "background tets turned inside out");
   summary = test::read_json(file.parent_path() / "out" / "summary.json");
