@@ -110,8 +110,6 @@ class ConstraintSystem {
   void factorise(Part& part, const ConstraintBlock& phi, std::span<const double> mass) const;
   // y = (Phi M^-1 Phi^T)^-1 y in place, for every component of the block at once (work: scratch).
   void solve(const Block& block, std::vector<double>& y, std::vector<double>& work) const;
-  template <int K>
-  static void solve_parts(const Block& block, double* y, std::size_t stride, std::size_t first, double* x);
 
   const Model& model_;
   std::vector<NodalConstraints*> sets_;
