@@ -2,9 +2,9 @@
 //
 // Each row's components are one short vector (a record), so that a pass over L's entries serves them all: per entry
 // one index, one value broadcast and one vector multiply-add, where the scalar loops did it per component. The
-// forward pass (L^-1, by column) adds each entry into its row's record; the backward pass (L^-T) sums each column's
-// entries into four partial sums in turn, added in a fixed order at the end: one chain of additions per column,
-// whose latency bound that pass, becomes four independent chains.
+// forward pass (L^-1, by column) subtracts each entry's share from its row's record; the backward pass (L^-T) sums each
+// column's entries into four partial sums in turn, added in a fixed order at the end: one chain of additions per
+// column, whose latency bound that pass, becomes four independent chains.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "factor_solve.cpp"
 #include "factor_solve.hpp"
