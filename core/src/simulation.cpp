@@ -344,6 +344,7 @@ StepRecord Simulation::last_step() const {
     return engine->internal_forces(u, f);
   };
   r.project_out = [constraints = constraint_system_.get()](std::span<double> v) { constraints->project_out(v); };
+  r.for_each_share = [team = &model_->team()](std::int64_t n, const auto& body) { team->for_each_share(n, body); };
   r.constraint_sets = constraint_sets_read_only_;
   r.previous_values = previous_values_;
   r.external_forces = !force_sets_.empty();

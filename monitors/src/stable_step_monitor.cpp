@@ -7,6 +7,7 @@
 #include "mtled/instability.hpp"
 #include "mtled/log.hpp"
 #include "mtled/model_view.hpp"
+#include "mtled/monitors/reorthogonalise.hpp"
 
 namespace mtled {
 namespace {
@@ -108,7 +109,7 @@ double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
     alpha[j] = q.col(j).dot(w);
     built = j + 1;
     // Full reorthogonalisation, twice (the forward difference makes A slightly unsymmetric).
-    for (int pass = 0; pass < 2; ++pass) w -= q.leftCols(built) * (q.leftCols(built).transpose() * w);
+    for (int pass = 0; pass < 2; ++pass) reorthogonalise(q, built, w, step.for_each_share);
     beta[j] = w.norm();
     if (j + 1 == size || !(beta[j] > 1e-10 * std::abs(alpha[j]))) break;
     q.col(j + 1) = w / beta[j];

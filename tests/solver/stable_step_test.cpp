@@ -4,12 +4,17 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <algorithm>
+#include <cstdlib>
 #include <span>
 
 #include "mtled/errors.hpp"
+#include "mtled/monitors/reorthogonalise.hpp"
 #include "mtled/monitors/scene_monitors.hpp"
 #include "mtled/scene.hpp"
 #include "mtled/simulation.hpp"
+#include "mtled/thread_team.hpp"
 #include "test_support.hpp"
 
 namespace mtled {
@@ -114,6 +119,36 @@ TEST(StableStepMonitor, LanczosEstimateMatchesTheAssembledSpectrum) {
   EXPECT_LE(simulation.stable_time_step(), exact);
   RecordProperty("estimate_over_exact", std::to_string(estimate / exact));
   RecordProperty("setup_bound_over_exact", std::to_string(simulation.stable_time_step() / exact));
+}
+
+// The Lanczos iteration's reorthogonalisation by row chunks: w loses exactly its part in the span of Q's first columns
+// (the later columns untouched, a last chunk shorter than the others), and the result is bit for bit the same however
+// the chunks are spread: on the caller, on a team of 2 and 3 threads, in shares taken in reverse order.
+TEST(StableStepMonitor, ReorthogonalisationByChunksRemovesTheBasisAlikeOnAnyThreads) {
+  const Eigen::Index rows = 3 * kReorthogonalisationChunk + 101, used = 7;
+  std::srand(5);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Eigen::MatrixXd::Random(rows, used + 2));
+  const Eigen::MatrixXd q = qr.householderQ() * Eigen::MatrixXd::Identity(rows, used + 2);
+  const Eigen::VectorXd w0 = Eigen::VectorXd::Random(rows);
+  Eigen::VectorXd serial = w0;
+  reorthogonalise(q, used, serial, {});
+  const Eigen::VectorXd expected = w0 - q.leftCols(used) * (q.leftCols(used).transpose() * w0);
+  EXPECT_LE((serial - expected).cwiseAbs().maxCoeff(), 1e-14 * w0.norm());
+  EXPECT_LE((q.leftCols(used).transpose() * serial).cwiseAbs().maxCoeff(), 1e-14 * w0.norm());
+  for (Eigen::Index k = used; k < used + 2; ++k) EXPECT_NEAR(q.col(k).dot(serial), q.col(k).dot(w0), 1e-14 * w0.norm());
+
+  const ForEachShare reversed = [](std::int64_t n, const auto& body) {
+    for (std::int64_t end = n; end > 0; end -= 2) body(std::max<std::int64_t>(end - 2, 0), end);
+  };
+  Eigen::VectorXd w = w0;
+  reorthogonalise(q, used, w, reversed);
+  EXPECT_TRUE(w == serial) << "shares in reverse order";
+  for (const int threads : {2, 3}) {
+    ThreadTeam team(threads);
+    w = w0;
+    reorthogonalise(q, used, w, [&](std::int64_t n, const auto& body) { team.for_each_share(n, body); });
+    EXPECT_TRUE(w == serial) << threads << " threads";
+  }
 }
 
 // The projection the constrained iteration uses: what it returns leaves every constrained value unchanged (the

@@ -4,6 +4,7 @@
 // throwing InstabilityError, and reports its own record into summary.json ("monitors": {name: record}); an output
 // writer records the step into its files. The step itself knows none of them.
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <span>
@@ -19,6 +20,10 @@ namespace mtled {
 
 class ModelView;
 class TimeIntegrator;
+
+// for_each_share(n, body): body(begin, end) over shares of 0 .. n - 1, on several threads or on the caller.
+using ForEachShare =
+    std::function<void(std::int64_t n, const std::function<void(std::int64_t begin, std::int64_t end)>& body)>;
 
 // What a monitor may change in the run it watches: the stable time step the integrator sizes its next steps by
 // (DiscreteSystem::stable_time_step). The stable-step monitor lowers it when the deformed body has become stiffer
@@ -49,6 +54,9 @@ struct StepRecord {
   std::function<Index(std::span<const double> u, std::span<double> f)> internal_forces;
   // Removes from v (3 per node) what the constraints hold: the subspace the constrained dynamics live in.
   std::function<void(std::span<double> v)> project_out;
+  // Runs body(begin, end) over shares of 0 .. n - 1 on the run's threads (the time step's team); empty: body(0, n).
+  // A sum split by these shares would depend on the thread count: sum fixed chunks and add them in order instead.
+  ForEachShare for_each_share;
   // The constraint sets (their prescribed values and reactions at n + 1) and each set's prescribed values at n: the
   // work the prescribed motions did this step is sum |reaction . (value(n+1) - value(n))| over the constrained
   // components.
