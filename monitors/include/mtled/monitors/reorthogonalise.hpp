@@ -1,6 +1,6 @@
 #pragma once
-// Gram-Schmidt against a basis stored as the columns of a tall matrix (the stable-step monitor's Lanczos vectors, up to
-// a few hundred MB on the largest scenes), spread over the run's threads.
+// Gram-Schmidt against a basis stored as the columns of a tall matrix (the stable-step monitor's Lanczos vectors: 60
+// of 222,702 unknowns, 107 MB, on the brain phantom), spread over the run's threads.
 #include <Eigen/Core>
 
 #include "mtled/monitor.hpp"
