@@ -6,9 +6,7 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
-#include <algorithm>
 #include <cstdlib>
-#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -92,12 +90,9 @@ BENCHMARK(BM_InternalForcesBaseline)->Arg(1)->ArgName("threads")->Unit(benchmark
 void BM_ConstraintProjection(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
   const Model& model = simulation_for(threads, "single").model();
-  NodalConstraints bottom;
+  NodalConstraints bottom;  // the scene's fixed boundary, without the needle's driven nodes
   bottom.name = "bottom";
-  double lowest = std::numeric_limits<double>::infinity();
-  for (Index i = 0; i < model.node_count(); ++i) lowest = std::min(lowest, model.nodes()[i][2]);
-  for (Index i = 0; i < model.node_count(); ++i)
-    if (model.nodes()[i][2] < lowest + 1e-9) bottom.add_node(i, Vec3::Zero());
+  for (const Index node : model.mesh().node_sets.at("bottom")) bottom.add_node(node, Vec3::Zero());
   ConstraintSystem constraints(model);
   constraints.update({&bottom}, model.lumped_mass(), true);
   std::vector<double> u(3 * static_cast<std::size_t>(model.node_count()));

@@ -93,7 +93,6 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass,
       "entries, the factors {} entries",
       block.phi.components, block.rows.size(), block.parts.size(), factorised, block.phi.row_nodes.size(), entries);
   block.y.assign(block.rows.size() * block.phi.components.size(), 0.0);
-  block.work.assign(block.rows.size() * factor_solve::record_width(block.phi.components.size()), 0.0);
 }
 
 // Phi's rows for the block's rows, by row and by node (scaled by 1 / m there).

@@ -101,7 +101,7 @@ class ConstraintSystem {
     ConstraintBlock phi;
     std::vector<Row> rows;
     std::vector<std::unique_ptr<Part>> parts;
-    std::vector<double> y, work;  // rows x components: the residual, then the multipliers; solver scratch
+    std::vector<double> y, work;  // y: rows x components, the residual, then the multipliers; work: solve()'s scratch
   };
   void rebuild(std::span<const double> mass, bool reuse_factors);
   void build_block(Block& block, std::span<const double> mass, std::vector<std::unique_ptr<Part>>& reusable);
