@@ -465,4 +465,92 @@ void write_loglog_plot(std::ostream& out, const std::vector<PlotPoint>& points, 
   out << body.str() << "</svg>\n";
 }
 
+namespace {
+
+void write_xy_panel(std::ostream& out, const XyPanel& panel, double x0, double x1, double y0, double y1, double title_y,
+                    double title_width) {
+  std::vector<double> xs = panel.x_points, ys = panel.y_points;
+  xs.insert(xs.end(), panel.x_line.begin(), panel.x_line.end());
+  ys.insert(ys.end(), panel.y_line.begin(), panel.y_line.end());
+  if (xs.empty()) xs = ys = {0.0};
+  auto range = [](const std::vector<double>& v) {
+    double lo = *std::min_element(v.begin(), v.end()), hi = *std::max_element(v.begin(), v.end());
+    if (!(hi > lo)) { lo -= 1.0 + std::abs(lo); hi += 1.0 + std::abs(hi); }
+    const double pad = 0.05 * (hi - lo);
+    return std::make_pair(lo - pad, hi + pad);
+  };
+  auto [xlo, xhi] = range(xs);
+  auto [ylo, yhi] = range(ys);
+  if (panel.identity_line) xlo = ylo = std::min(xlo, ylo), xhi = yhi = std::max(xhi, yhi);
+  auto sx = [&](double v) { return x0 + (v - xlo) / (xhi - xlo) * (x1 - x0); };
+  auto sy = [&](double v) { return y1 - (v - ylo) / (yhi - ylo) * (y1 - y0); };
+  write_wrapped(out, (x0 + x1) / 2, title_y, panel.title, 13, title_width, Anchor::middle);
+  for (double t : linear_ticks(ylo, yhi, 5)) {
+    out << fmt::format("<line x1=\"{:.2f}\" y1=\"{:.2f}\" x2=\"{:.2f}\" y2=\"{:.2f}\" stroke=\"#ddd\"/>\n", x0, sy(t),
+                       x1, sy(t));
+    out << fmt::format("<text x=\"{:.2f}\" y=\"{:.2f}\" text-anchor=\"end\" font-size=\"10\">{}</text>\n", x0 - 5,
+                       sy(t) + 3.5, number(t));
+  }
+  const auto x_ticks = linear_ticks(xlo, xhi, 4);
+  std::vector<double> positions;
+  std::vector<std::string> labels;
+  for (double t : x_ticks) {
+    positions.push_back(sx(t));
+    labels.push_back(number(t));
+  }
+  const auto keep = labels_that_fit(positions, labels, 10, true);
+  for (std::size_t i = 0; i < x_ticks.size(); ++i) {
+    out << fmt::format("<line x1=\"{0:.2f}\" y1=\"{1:.2f}\" x2=\"{0:.2f}\" y2=\"{2:.2f}\" stroke=\"black\"/>\n",
+                       positions[i], y1, y1 + 4);
+    if (keep[i])
+      out << fmt::format("<text x=\"{:.2f}\" y=\"{:.2f}\" text-anchor=\"middle\" font-size=\"10\">{}</text>\n",
+                         positions[i], y1 + 16, labels[i]);
+  }
+  if (panel.identity_line)
+    out << fmt::format("<line x1=\"{:.2f}\" y1=\"{:.2f}\" x2=\"{:.2f}\" y2=\"{:.2f}\" stroke=\"#c33\" "
+                       "stroke-dasharray=\"4 3\"/>\n", sx(xlo), sy(xlo), sx(xhi), sy(xhi));
+  if (!panel.x_line.empty()) {
+    out << "<polyline fill=\"none\" stroke=\"#c33\" stroke-width=\"1.5\" points=\"";
+    for (std::size_t i = 0; i < panel.x_line.size(); ++i)
+      out << fmt::format("{}{:.2f},{:.2f}", i ? " " : "", sx(panel.x_line[i]), sy(panel.y_line[i]));
+    out << "\"/>\n";
+  }
+  for (std::size_t i = 0; i < panel.x_points.size(); ++i)
+    out << fmt::format("<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"2.5\" fill=\"none\" stroke=\"#2a4a75\"/>\n",
+                       sx(panel.x_points[i]), sy(panel.y_points[i]));
+  out << fmt::format("<path d=\"M {:.2f} {:.2f} V {:.2f} H {:.2f}\" fill=\"none\" stroke=\"black\"/>\n", x0, y0, y1, x1);
+  write_wrapped(out, (x0 + x1) / 2, y1 + 36, panel.x_label, 12, x1 - x0, Anchor::middle);
+  out << fmt::format("<text transform=\"translate({:.2f} {:.2f}) rotate(-90)\" text-anchor=\"middle\" "
+                     "font-size=\"12\">{}</text>\n", x0 - 48, (y0 + y1) / 2, escape(panel.y_label));
+}
+
+}  // namespace
+
+void write_xy_panels(std::ostream& out, const std::vector<XyPanel>& panels, const std::string& heading,
+                     const std::string& subheading) {
+  const double panel_w = 380, panel_h = 330;
+  const double left = 66, right = 24, lower = 56;
+  const double width = panel_w * static_cast<double>(std::max<std::size_t>(panels.size(), 1));
+  const double text_width_max = width - 24, title_width = panel_w - 16;
+  std::size_t title_lines = 1;
+  for (const auto& panel : panels) title_lines = std::max(title_lines, line_count(panel.title, 13, title_width));
+  const double heading_end =
+      24 + 20.0 * static_cast<double>(line_count(heading, 16, text_width_max) - 1) +
+      (subheading.empty() ? 0.0 : 16.0 * static_cast<double>(line_count(subheading, 11, text_width_max)));
+  const double title_y = heading_end + 30;
+  const double top = title_y + 16.25 * static_cast<double>(title_lines);
+  const double height = top + panel_h - 30;
+  write_svg_start(out, width, height);
+  double y = write_wrapped(out, width / 2, 24, heading, 16, text_width_max, Anchor::middle);
+  if (!subheading.empty())
+    write_wrapped(out, width / 2, y - 4, subheading, 11, text_width_max, Anchor::middle, "fill=\"#444\"");
+  for (std::size_t p = 0; p < panels.size(); ++p) {
+    const double x0 = static_cast<double>(p) * panel_w + left, x1 = (static_cast<double>(p) + 1) * panel_w - right;
+    out << fmt::format("<g id=\"panel{}\">\n", p);
+    write_xy_panel(out, panels[p], x0, x1, top, height - lower, title_y, title_width);
+    out << "</g>\n";
+  }
+  out << "</svg>\n";
+}
+
 }  // namespace mtled::svg

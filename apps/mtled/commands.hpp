@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -43,6 +44,17 @@ struct StudyOptions {
   bool gather = false;             // run nothing: measure and report the runs the job list made
 };
 
+struct FitOptions {
+  std::filesystem::path fit;     // FIT.json
+  std::filesystem::path output;  // the fit's folder
+  std::vector<std::string> overrides;  // --set on the fit file
+  int threads = 0;               // in all, split between the runs that go at once (0: the fit file's, else all)
+  bool reuse_mesh = true;        // write each experiment's mesh once and read it in every run
+  std::optional<unsigned long long> synthesize;  // write data from the model at the start values, with this seed
+  std::vector<std::filesystem::path> plugin_paths;
+  std::string log_level = "warn";  // passed to every forward run
+};
+
 struct ConformanceOptions {
   std::filesystem::path library;              // a plugin library (mtled-CATEGORY-NAME.so) or a folder of them
   std::vector<std::string> gtest_arguments;   // passed on to the runner (--gtest_brief=1, ...)
@@ -58,6 +70,7 @@ int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as
 int print_schema(const std::vector<std::filesystem::path>& plugin_paths);
 int compare_command(const CompareOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
 int study_command(const StudyOptions& options);
+int fit_command(const FitOptions& options);
 // Replaces the process by the conformance runner (its exit code: 0 when every suite passed).
 int conformance_command(const ConformanceOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
 

@@ -26,9 +26,11 @@ struct Commands {
   std::string describe;
   mtled::app::CompareOptions compare;
   mtled::app::StudyOptions study;
+  mtled::app::FitOptions fit;
   mtled::app::ConformanceOptions conformance;
   CLI::App *run_cmd = nullptr, *validate_cmd = nullptr, *plugins_cmd = nullptr, *schema_cmd = nullptr,
-           *compare_cmd = nullptr, *study_cmd = nullptr, *conformance_cmd = nullptr, *mesh_cmd = nullptr;
+           *compare_cmd = nullptr, *study_cmd = nullptr, *conformance_cmd = nullptr, *mesh_cmd = nullptr,
+           *fit_cmd = nullptr;
 };
 
 void add_global_options(CLI::App& cli, Commands& c) {
@@ -99,6 +101,18 @@ void add_analysis_commands(CLI::App& cli, Commands& c) {
                           "scheduler); then --gather");
   c.study_cmd->add_flag("--gather", c.study.gather,
                         "run nothing: measure the runs a job list made in the study's folder and write the report");
+
+  c.fit_cmd = cli.add_subcommand("fit", "identify scene parameters from measurements (docs/calibration.md)");
+  c.fit_cmd->add_option("fit", c.fit.fit, "fit file (JSON)")->required();
+  c.fit_cmd->add_option("-o,--output", c.fit.output, "the fit's folder (fit.json, fit.csv, fit_data.csv, fit.svg, runs/)")
+      ->required();
+  c.fit_cmd->add_option("--set", c.fit.overrides, "override a value of the fit file: /json/pointer=value (repeatable)");
+  c.fit_cmd->add_option("--threads", c.fit.threads, "threads in all, split between the runs that go at once")
+      ->check(CLI::NonNegativeNumber);
+  c.fit_cmd->add_flag("!--no-mesh-reuse", c.fit.reuse_mesh, "generate each run's mesh again instead of writing it once");
+  c.fit_cmd->add_option("--synthesize", c.fit.synthesize,
+                        "write each data file again under OUTPUT/data from the model at the start values plus "
+                        "Gaussian noise of the data's sigma, seeded with this number; fit nothing");
 }
 
 int dispatch(Commands& c) {
@@ -114,6 +128,7 @@ int dispatch(Commands& c) {
   if (*c.schema_cmd) return app::print_schema(c.plugin_paths);
   if (*c.compare_cmd) return app::compare_command(c.compare, c.plugin_paths);
   if (*c.study_cmd) return app::study_command(c.study);
+  if (*c.fit_cmd) return app::fit_command(c.fit);
   if (*c.conformance_cmd) return app::conformance_command(c.conformance, c.plugin_paths);
   return 1;
 }
@@ -162,7 +177,8 @@ int main(int argc, char** argv) {
   // The other ranks say only what went wrong; rank 0 tells the run.
   set_log_level(app::ranks().writes() ? c.log_level : "error");
   if (!runs_on_these_ranks(c)) return 2;
-  c.run.scene.plugin_paths = c.validate.plugin_paths = c.mesh.scene.plugin_paths = c.study.plugin_paths = c.plugin_paths;
+  c.run.scene.plugin_paths = c.validate.plugin_paths = c.mesh.scene.plugin_paths = c.study.plugin_paths = c.fit.plugin_paths =
+      c.plugin_paths;
   c.study.log_level = c.log_level;
   int code = 1;
   try {

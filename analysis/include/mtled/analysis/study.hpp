@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "mtled/analysis/child_run.hpp"
 #include "mtled/json.hpp"
 #include "mtled/io/output.hpp"
 #include "mtled/types.hpp"
@@ -98,15 +99,7 @@ Study read(const std::filesystem::path& file);
 void check_scenes(Study& study, const std::vector<std::filesystem::path>& plugin_paths);
 
 // ---- runs
-// How a run's process ended (what its folder alone cannot tell: a signal, the study's timeout, its memory).
-struct RunOutcome {
-  bool reused = false;  // an earlier successful run kept (--reuse); nothing ran
-  int exit_code = -1;
-  int signal = 0;
-  bool timed_out = false;
-  double elapsed_s = 0.0;
-  double max_rss_mb = 0.0;
-};
+using mtled::RunOutcome;  // how a run's process ended (child_run.hpp)
 
 class Runner {
  public:

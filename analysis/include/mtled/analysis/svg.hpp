@@ -33,4 +33,15 @@ struct PlotPoint {
 void write_loglog_plot(std::ostream& out, const std::vector<PlotPoint>& points, const std::string& title,
                        const std::string& x_label, const std::string& y_label, const std::vector<std::string>& notes);
 
+// Linear x-y panels side by side: measured points as circles, a fitted curve as a line, and optionally the line
+// y = x (for measured against predicted values).
+struct XyPanel {
+  std::string title, x_label, y_label;
+  std::vector<double> x_points, y_points;
+  std::vector<double> x_line, y_line;
+  bool identity_line = false;
+};
+void write_xy_panels(std::ostream& out, const std::vector<XyPanel>& panels, const std::string& heading,
+                     const std::string& subheading);
+
 }  // namespace mtled::svg

@@ -1,0 +1,47 @@
+// mtled fit: scene parameters identified from measurements (the fit library, analysis/include/mtled/analysis/fit.hpp;
+// the file format in docs/calibration.md). Everything is checked before the first forward run; with --synthesize the
+// command writes data made by the model at the start values, with seeded noise, instead of fitting.
+#include <iostream>
+
+#include "commands.hpp"
+#include "mtled/analysis/fit.hpp"
+#include "mtled/io/output.hpp"
+#include "mtled/log.hpp"
+
+namespace mtled::app {
+
+int fit_command(const FitOptions& options) {
+  fit::Plan plan = fit::read(options.fit, options.overrides, options.plugin_paths);
+  if (options.threads > 0) plan.settings.threads = options.threads;
+  const OutputFolder out(options.output);
+  fit::Result result;
+  if (options.reuse_mesh) result.setup_seconds = fit::write_meshes_once(plan, out.path(), options.plugin_paths);
+  fit::Evaluator evaluator(plan, out.path(), options.plugin_paths, options.log_level);
+  log().info(
+      "fit: {} parameters, {} experiments, {} data; {} runs at once on {} threads each", plan.parameters.size(),
+      plan.experiments.size(),
+      [&] {
+        std::size_t n = 0;
+        for (const auto& e : plan.experiments) n += e.data.size();
+        return n;
+      }(),
+      evaluator.runs_at_once(), evaluator.threads_per_run());
+  if (options.synthesize) {
+    fit::synthesize(plan, evaluator, *options.synthesize, out.path() / "data");
+    return 0;
+  }
+  fit::check_measured(plan);
+  const double mesh_seconds = result.setup_seconds;
+  result = fit::solve(plan, evaluator);
+  result.setup_seconds = mesh_seconds;
+  const fit::Statistics stats = fit::statistics(plan, result);
+  fit::write_report(plan, result, stats, out.path());
+  fit::print_summary(std::cout, plan, result, stats);
+  if (result.values.empty()) {
+    log().error("the fit failed: {}", result.termination);
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace mtled::app
