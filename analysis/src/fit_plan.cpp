@@ -13,6 +13,7 @@
 #include "mtled/analysis/fit.hpp"
 #include "mtled/analysis/scene_sections.hpp"
 #include "mtled/errors.hpp"
+#include "mtled/markups.hpp"
 #include "mtled/point_search.hpp"
 #include "mtled/simulation.hpp"
 
@@ -23,6 +24,10 @@ namespace mtled::fit {
 double Parameter::scaled(double v) const {
   return log_scale ? (std::log10(v) - std::log10(lower)) / (std::log10(upper) - std::log10(lower))
                    : (v - lower) / (upper - lower);
+}
+
+double Parameter::slope(double v) const {
+  return log_scale ? v * std::log(10.0) * (std::log10(upper) - std::log10(lower)) : upper - lower;
 }
 
 double Parameter::value(double s) const {
@@ -132,14 +137,15 @@ class FitReader {
       e.where = where;
       e.name = item.value("name", fmt::format("experiment{}", i));
       if (!names.insert(e.name).second) problem(where + "/name", fmt::format("\"{}\" names two experiments", e.name));
-      for (const char* key : {"scene", "data"}) {
-        if (!item.contains(key) || !item[key].is_string()) {
-          problem(where + "/" + key, fmt::format("required: the {} file, relative to the fit file's folder", key));
-          continue;
-        }
-        const fs::path path = (plan_folder() / item[key].get<std::string>()).lexically_normal();
-        if (!fs::is_regular_file(path)) problem(where + "/" + key, fmt::format("no such file: {}", path.string()));
-        (std::string(key) == "scene" ? e.scene : e.data_file) = path;
+      read_compare(item, where, e);
+      e.scene = file_at(item, "scene", where + "/scene");
+      const json data = item.value("data", json());
+      if (e.quantity == Quantity::markers && data.is_object()) {  // two 3D Slicer markups files
+        check_keys(data, where + "/data", {"before", "after"});
+        e.markups_before = file_at(data, "before", where + "/data/before");
+        e.data_file = file_at(data, "after", where + "/data/after");
+      } else {
+        e.data_file = file_at(item, "data", where + "/data");
       }
       if (item.contains("set")) {
         if (!item["set"].is_object())
@@ -151,6 +157,20 @@ class FitReader {
       read_sigma(item, where, e);
       out.push_back(std::move(e));
     }
+  }
+
+  // A file named by object[key], relative to the fit file's folder; empty (and a problem) when absent or missing.
+  fs::path file_at(const json& object, const char* key, const std::string& pointer) {
+    if (!object.contains(key) || !object[key].is_string()) {
+      problem(pointer, fmt::format("required: the {} file, relative to the fit file's folder", key));
+      return {};
+    }
+    const fs::path path = (plan_folder() / object[key].get<std::string>()).lexically_normal();
+    if (!fs::is_regular_file(path)) {
+      problem(pointer, fmt::format("no such file: {}", path.string()));
+      return {};
+    }
+    return path;
   }
 
   void read_compare(const json& item, const std::string& where, Experiment& e) {
@@ -201,7 +221,50 @@ class FitReader {
     if (relative && e.quantity == Quantity::markers)
       problem(where + "/sigma_relative", "markers take an absolute \"sigma\" (m): the imaging's resolution");
     const double s = sigma ? *sigma : weight ? 1.0 / std::sqrt(*weight) : 1.0;
-    if (!e.data_file.empty() && fs::is_regular_file(e.data_file)) read_data(e, s > 0.0 ? s : 1.0);
+    if (e.data_file.empty()) return;
+    if (!e.markups_before.empty())
+      read_markups_pair(e, s > 0.0 ? s : 1.0);
+    else
+      read_data(e, s > 0.0 ? s : 1.0);
+  }
+
+  // Markers placed in 3D Slicer on the image before and after: each label's displacement, at its position before.
+  void read_markups_pair(Experiment& e, double sigma) {
+    MarkupsPoints before, after;
+    try {
+      before = read_markups(e.markups_before);
+      after = read_markups(e.data_file);
+    } catch (const InputError& error) {
+      problems_.insert(problems_.end(), error.problems().begin(), error.problems().end());
+      return;
+    }
+    if (before.frame != after.frame)
+      problems_.push_back({e.data_file.string(), fmt::format("its points are in {} and the \"before\" file's in {}: "
+                                                             "save both in one frame",
+                                                             after.frame, before.frame)});
+    e.markups_frame = before.frame;
+    for (std::size_t i = 0; i < after.points.size(); ++i) {
+      const std::string where = fmt::format("{}: /markups/0/controlPoints/{}", e.data_file.string(), i);
+      const auto& label = after.points[i].label;
+      const auto match = std::find_if(before.points.begin(), before.points.end(),
+                                      [&](const MarkupsPoint& p) { return p.label == label; });
+      if (label.empty() || match == before.points.end()) {
+        problems_.push_back({where, fmt::format("no point labelled \"{}\" in {}: markers are matched by label", label,
+                                                e.markups_before.string())});
+        continue;
+      }
+      for (int c = 0; c < 3; ++c) {
+        Datum d;
+        d.position = match->position;
+        d.component = c;
+        d.label = label;
+        d.value = after.points[i].position[c] - match->position[c];
+        d.sigma = sigma;
+        d.source = where;
+        e.data.push_back(d);
+      }
+    }
+    if (e.data.empty()) problems_.push_back({e.data_file.string(), "no marker is in both files"});
   }
 
   // The data file: a header naming the columns, then one row per datum (markers: three data per row).
@@ -239,8 +302,7 @@ class FitReader {
       ++number;
       if (line.find_first_not_of(" \t\r") == std::string::npos || line[line.find_first_not_of(" \t\r")] == '#')
         continue;
-      read_row(e, split_csv_line(line), index, sigma_column, label_column, sigma, fmt::format("{}:{}", name, number),
-               number);
+      read_row(e, split_csv_line(line), index, sigma_column, label_column, sigma, fmt::format("{}:{}", name, number));
     }
     if (e.data.empty() && !header.empty()) problems_.push_back({name, "no data rows under the header"});
   }
@@ -250,7 +312,7 @@ class FitReader {
   }
 
   void read_row(Experiment& e, const std::vector<std::string>& fields, const std::vector<int>& index, int sigma_column,
-                int label_column, double sigma, const std::string& where, int line) {
+                int label_column, double sigma, const std::string& where) {
     auto value_of = [&](int column, double& out) {
       const std::string text = column < static_cast<int>(fields.size()) ? fields[static_cast<std::size_t>(column)] : "";
       char* end = nullptr;
@@ -277,7 +339,7 @@ class FitReader {
       d.abscissa = v[0];
       d.value = v[1];
       d.sigma = s;
-      d.line = line;
+      d.source = where;
       e.data.push_back(d);
       return;
     }
@@ -291,7 +353,7 @@ class FitReader {
       d.label = label;
       d.value = v[3 + c];
       d.sigma = s;
-      d.line = line;
+      d.source = where;
       e.data.push_back(d);
     }
   }
@@ -465,10 +527,9 @@ class FitReader {
       e.depth_full = root["needle"].value("depth", 0.0);
       for (const auto& d : e.data)
         if (d.abscissa < 0.0 || d.abscissa > e.depth_full * (1.0 + 1e-9))
-          problems_.push_back({fmt::format("{}:{}", e.data_file.string(), d.line),
-                               fmt::format("depth {:g} m is outside the run's range [0, {:g}] m (the scene's "
-                                           "/needle/depth); raise the depth in the experiment's \"set\"",
-                                           d.abscissa, e.depth_full)});
+          problems_.push_back({d.source, fmt::format("depth {:g} m is outside the run's range [0, {:g}] m (the scene's "
+                                                     "/needle/depth); raise the depth in the experiment's \"set\"",
+                                                     d.abscissa, e.depth_full)});
       return;
     }
     if (e.quantity != Quantity::reaction_force) return;
@@ -490,15 +551,23 @@ class FitReader {
     const double lo = std::min(0.0, e.displacement_full), hi = std::max(0.0, e.displacement_full);
     for (const auto& d : e.data)
       if (d.abscissa < lo - 1e-12 || d.abscissa > hi + 1e-12)
-        problems_.push_back({fmt::format("{}:{}", e.data_file.string(), d.line),
-                             fmt::format("displacement {:g} m is outside the run's range [{:g}, {:g}] m (set \"{}\", "
-                                         "component {}, signed as in the scene)",
-                                         d.abscissa, lo, hi, e.set_name, "xyz"[e.component])});
+        problems_.push_back(
+            {d.source, fmt::format("displacement {:g} m is outside the run's range [{:g}, {:g}] m (set \"{}\", "
+                                   "component {}, signed as in the scene)",
+                                   d.abscissa, lo, hi, e.set_name, "xyz"[e.component])});
   }
 
   // A marker must lie in the body: inside one of the mesh's tets (a marker outside would be extrapolated).
   void check_markers_inside(Experiment& e, const Scene& scene, PluginCatalog& catalog) {
     const TetMesh mesh = load_scene_mesh(scene, catalog);
+    // Markups in the other of Slicer's frames than the mesh records: into the mesh's (as the needle's trajectory).
+    if (!e.markups_frame.empty() && !mesh.coordinate_system.empty() && e.markups_frame != mesh.coordinate_system) {
+      for (auto& d : e.data) {
+        d.position = flip_lps_ras(d.position);
+        if (d.component < 2) d.value = -d.value;
+      }
+      e.markups_frame = mesh.coordinate_system;
+    }
     std::vector<Vec3> centroids(mesh.tets.size());
     for (std::size_t t = 0; t < mesh.tets.size(); ++t) centroids[t] = tet_centroid(mesh, static_cast<Index>(t));
     const PointSearch search(centroids);
@@ -508,9 +577,9 @@ class FitReader {
       search.nearest(x, 48, near);
       const bool inside = std::any_of(near.begin(), near.end(), [&](Index t) { return inside_tet(mesh, t, x); });
       if (!inside)
-        problems_.push_back({fmt::format("{}:{}", e.data_file.string(), e.data[i].line),
-                             fmt::format("marker \"{}\" at ({:g}, {:g}, {:g}) m is outside the body of {}",
-                                         e.data[i].label, x[0], x[1], x[2], e.scene.filename().string())});
+        problems_.push_back(
+            {e.data[i].source, fmt::format("marker \"{}\" at ({:g}, {:g}, {:g}) m is outside the body of {}",
+                                           e.data[i].label, x[0], x[1], x[2], e.scene.filename().string())});
     }
   }
 
@@ -542,7 +611,7 @@ void check_measured(const Plan& plan) {
   for (const auto& e : plan.experiments)
     for (const auto& d : e.data)
       if (!std::isfinite(d.sigma))
-        problems.push_back({fmt::format("{}:{}", e.data_file.string(), d.line),
+        problems.push_back({d.source,
                             "a measured value of 0 has no relative standard deviation: give a sigma column, or "
                             "\"sigma\" instead of \"sigma_relative\""});
   if (!problems.empty()) throw InputError(problems);

@@ -27,13 +27,20 @@ const Evaluation* best_of(const Result& r) {
 // that the data do not depend on at all.
 void identifiability(const Plan& plan, const Result& result, Statistics& s) {
   const std::size_t n = plan.parameters.size();
+  // Sensitivities per unit of each parameter's range; runs on other thread counts agree to round-off only, so a
+  // column that small is no sensitivity at all.
+  std::vector<double> sensitivity(n);
+  for (std::size_t k = 0; k < n; ++k)
+    sensitivity[k] = result.jacobian.col(static_cast<Index>(k)).norm() * plan.parameters[k].slope(result.values[k]);
+  const double largest = *std::max_element(sensitivity.begin(), sensitivity.end());
   for (std::size_t k = 0; k < n; ++k) {
     const Parameter& p = plan.parameters[k];
     const double v = result.values[k], se = s.standard_error[static_cast<Index>(k)];
     const double width = p.log_scale ? 4.0 * se / (v * std::log(10.0)) : 4.0 * se;
     const double range = p.log_scale ? std::log10(p.upper / p.lower) : p.upper - p.lower;
-    if (result.jacobian.col(static_cast<Index>(k)).norm() == 0.0)
-      s.not_identifiable.push_back(fmt::format("{}: the data do not change with it (zero sensitivity)", p.name));
+    if (sensitivity[k] <= 1e-7 * largest)
+      s.not_identifiable.push_back(
+          fmt::format("{}: the data do not change with it (no sensitivity beyond round-off)", p.name));
     else if (!std::isfinite(se) || width > range)
       s.not_identifiable.push_back(
           fmt::format("{}: its 2-sigma interval ({:.3g} {}) is wider than its bounds ({:.3g}): "

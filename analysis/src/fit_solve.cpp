@@ -24,6 +24,7 @@
 #include "mtled/errors.hpp"
 #include "mtled/io/mesh_writer.hpp"
 #include "mtled/log.hpp"
+#include "mtled/markups.hpp"
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/simulation.hpp"
 
@@ -63,7 +64,7 @@ Evaluator::Evaluator(const Plan& plan, const fs::path& output, const std::vector
                          ? plan.settings.concurrent_runs
                          : static_cast<int>(plan.parameters.size() * plan.experiments.size()) * searches;
   at_once_ = std::clamp(wanted, 1, threads);
-  threads_per_run_ = std::max(1, threads / at_once_);
+  threads_ = threads;
 }
 
 Evaluator::~Evaluator() = default;
@@ -89,11 +90,13 @@ std::vector<Evaluation> Evaluator::evaluate(const std::vector<std::vector<double
   const std::size_t experiments = plan_.experiments.size();
   std::vector<RunOutcome> outcomes(points.size() * experiments);
   std::vector<std::thread> jobs;
+  // A batch smaller than the runs allowed at once gives each run more threads (a trial point gets them all).
+  const int threads = std::max(1, threads_ / std::min(at_once_, static_cast<int>(outcomes.size())));
   for (std::size_t j = 0; j < outcomes.size(); ++j)
     jobs.emplace_back([&, j] {
       const Evaluation& e = out[j / experiments];
       const fs::path folder = e.folder / plan_.experiments[j % experiments].name;
-      const std::vector<std::string> args = arguments(e, j % experiments, folder);
+      const std::vector<std::string> args = arguments(e, j % experiments, folder, threads);
       fs::create_directories(folder);
       slots.acquire();
       outcomes[j] = run_child(executable_, args, folder / "mtled.log", plan_.settings.timeout_s);
@@ -109,11 +112,12 @@ std::vector<Evaluation> Evaluator::evaluate(const std::vector<std::vector<double
 
 // `mtled run` of experiment x at the evaluation's values: the experiment's own overrides, the mesh written once,
 // then the parameters.
-std::vector<std::string> Evaluator::arguments(const Evaluation& e, std::size_t x, const fs::path& folder) const {
+std::vector<std::string> Evaluator::arguments(const Evaluation& e, std::size_t x, const fs::path& folder,
+                                              int threads) const {
   const Experiment& experiment = plan_.experiments[x];
   std::vector<std::string> args{
-      "run",       experiment.scene.string(),       "-o", folder.string(), "--no-progress", "--log-level", log_level_,
-      "--threads", std::to_string(threads_per_run_)};
+      "run",       experiment.scene.string(), "-o", folder.string(), "--no-progress", "--log-level", log_level_,
+      "--threads", std::to_string(threads)};
   for (const auto& [pointer, value] : experiment.set.items())
     args.insert(args.end(), {"--set", pointer + "=" + value.dump()});
   if (!experiment.mesh_file.empty())
@@ -281,10 +285,12 @@ Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::Vector
     const Eigen::VectorXd r = residual_vector(current);
     const Eigen::VectorXd g = J.transpose() * r;
     const Eigen::MatrixXd A = J.transpose() * J;
-    // A parameter at a bound that the gradient pushes further out stays there.
+    // A parameter at a bound that the gradient pushes further out stays there, and so does one the data do not
+    // depend on (a zero column: no step in it means anything).
     std::vector<Index> free;
+    const double sensitive = 1e-14 * A.diagonal().maxCoeff();
     for (Index k = 0; k < n; ++k)
-      if (!((z[k] <= 0.0 && g[k] > 0.0) || (z[k] >= 1.0 && g[k] < 0.0))) free.push_back(k);
+      if (A(k, k) > sensitive && !((z[k] <= 0.0 && g[k] > 0.0) || (z[k] >= 1.0 && g[k] < 0.0))) free.push_back(k);
     bool accepted = false, small_step = false;
     Eigen::VectorXd rejected = Eigen::VectorXd::Constant(n, -1.0);  // a trial already refused: not run again
     while (!accepted && budget_left() && lambda < 1e10 && !free.empty()) {
@@ -299,7 +305,7 @@ Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::Vector
       const Eigen::VectorXd d = Af.ldlt().solve(-gf);
       Eigen::VectorXd trial = z;
       for (Index i = 0; i < m; ++i) trial[free[i]] = std::clamp(z[free[i]] + d[i], 0.0, 1.0);
-      if ((trial - z).norm() < s.tolerance * 1e-2) {
+      if ((trial - z).lpNorm<Eigen::Infinity>() < s.tolerance) {  // below what the runs' own noise resolves
         small_step = true;
         break;
       }
@@ -333,7 +339,8 @@ Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::Vector
     }
     if (small_step || free.empty()) {
       out.converged = true;
-      out.termination = free.empty() ? "every parameter is at a bound that the data push it past"
+      out.termination = free.empty() ? "no parameter can move: each is at a bound the data push it past, or the data "
+                                       "do not depend on it"
                                      : "converged: the next step is below the tolerance";
       break;
     }
@@ -441,13 +448,8 @@ Result solve(const Plan& plan, Evaluator& evaluator) {
     Eigen::MatrixXd J = best->jacobian_scaled;
     if (J.size() == 0) J = jacobian(plan, evaluator, best->z, best->best, static_cast<int>(best - searches.data()));
     // d(residual)/d(value) = d(residual)/d(scaled) * d(scaled)/d(value)
-    for (std::size_t k = 0; k < plan.parameters.size(); ++k) {
-      const Parameter& p = plan.parameters[k];
-      const double v = result.values[k];
-      const double dz = p.log_scale ? 1.0 / (v * std::log(10.0) * (std::log10(p.upper) - std::log10(p.lower)))
-                                    : 1.0 / (p.upper - p.lower);
-      J.col(static_cast<Index>(k)) *= dz;
-    }
+    for (std::size_t k = 0; k < plan.parameters.size(); ++k)
+      J.col(static_cast<Index>(k)) /= plan.parameters[k].slope(result.values[k]);
     result.jacobian = J;
   }
   result.evaluations = evaluator.history();
@@ -471,6 +473,27 @@ class Noise {
   std::mt19937_64 engine_;
 };
 
+// An "after" 3D Slicer markups file: each marker moved by the model's displacement plus noise, in millimetres, in
+// the frame of the "before" file.
+json synthetic_markups(const Experiment& ex, const std::vector<double>& model, Noise& noise) {
+  const MarkupsPoints before = read_markups(ex.markups_before);
+  const bool flipped = ex.markups_frame != before.frame;
+  json points = json::array();
+  for (std::size_t i = 0; i < ex.data.size(); i += 3) {
+    Vec3 moved;
+    for (int c = 0; c < 3; ++c) moved[c] = ex.data[i].position[c] + model[i + c] + ex.data[i + c].sigma * noise();
+    if (flipped) moved = flip_lps_ras(moved);
+    points.push_back({{"label", ex.data[i].label},
+                      {"position", {1e3 * moved[0], 1e3 * moved[1], 1e3 * moved[2]}},
+                      {"positionStatus", "defined"}});
+  }
+  return {{"markups",
+           {{{"type", "Fiducial"},
+             {"coordinateSystem", before.frame},
+             {"coordinateUnits", "mm"},
+             {"controlPoints", points}}}}};
+}
+
 }  // namespace
 
 void synthesize(const Plan& plan, Evaluator& evaluator, unsigned long long seed, const fs::path& folder) {
@@ -488,6 +511,10 @@ void synthesize(const Plan& plan, Evaluator& evaluator, unsigned long long seed,
     const Experiment& ex = plan.experiments[x];
     std::ofstream out(folder / ex.data_file.filename());
     const auto& model = e.model[x];
+    if (!ex.markups_before.empty()) {
+      out << synthetic_markups(ex, model, noise).dump(2) << "\n";
+      continue;
+    }
     if (ex.quantity == Quantity::markers) {
       out << "label,x_m,y_m,z_m,ux_m,uy_m,uz_m,sigma_m\n";
       for (std::size_t i = 0; i < ex.data.size(); i += 3) {

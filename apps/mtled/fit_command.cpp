@@ -18,14 +18,14 @@ int fit_command(const FitOptions& options) {
   if (options.reuse_mesh) result.setup_seconds = fit::write_meshes_once(plan, out.path(), options.plugin_paths);
   fit::Evaluator evaluator(plan, out.path(), options.plugin_paths, options.log_level);
   log().info(
-      "fit: {} parameters, {} experiments, {} data; {} runs at once on {} threads each", plan.parameters.size(),
+      "fit: {} parameters, {} experiments, {} data; up to {} runs at once sharing {} threads", plan.parameters.size(),
       plan.experiments.size(),
       [&] {
         std::size_t n = 0;
         for (const auto& e : plan.experiments) n += e.data.size();
         return n;
       }(),
-      evaluator.runs_at_once(), evaluator.threads_per_run());
+      evaluator.runs_at_once(), evaluator.threads());
   if (options.synthesize) {
     fit::synthesize(plan, evaluator, *options.synthesize, out.path() / "data");
     return 0;

@@ -5,12 +5,11 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
-#include <fstream>
-#include <iterator>
 
 #include "mtled/errors.hpp"
 #include "mtled/json.hpp"
 #include "mtled/log.hpp"
+#include "mtled/markups.hpp"
 
 namespace mtled {
 
@@ -31,75 +30,29 @@ void declare_needle_path(ComponentDeclaration& d) {
 
 namespace {
 
-Vec3 markup_position(const json& point, const std::string& where) {
-  const auto position = point.find("position");
-  if (position == point.end() || !position->is_array() || position->size() != 3 ||
-      !std::all_of(position->begin(), position->end(), [](const json& x) { return x.is_number(); }))
-    throw InputError(where, "a control point needs \"position\": [x, y, z] (numbers)");
-  return Vec3((*position)[0].get<double>(), (*position)[1].get<double>(), (*position)[2].get<double>());
-}
-
-// A string member, or `otherwise` when absent; InputError when it is not a string.
-std::string text_member(const json& object, const char* key, const char* otherwise, const std::string& where) {
-  const auto it = object.find(key);
-  if (it == object.end()) return otherwise;
-  if (!it->is_string()) throw InputError(fmt::format("{}/{}", where, key), "expected a string");
-  return it->get<std::string>();
+// A needle's trajectory: the markup's first two placed points, the entry then the target.
+MarkupsTrajectory trajectory_of(const MarkupsPoints& markups, const std::string& label) {
+  const auto& points = markups.points;
+  if (points.size() < 2)
+    throw InputError(label + ": /markups/0/controlPoints",
+                     fmt::format("the {} has {} placed control point{}; a needle trajectory needs two, the entry and "
+                                 "then the target (a Line markup, or a point list's first two points)",
+                                 markups.type.empty() ? "markup" : markups.type, points.size(),
+                                 points.size() == 1 ? "" : "s"));
+  if ((points[1].position - points[0].position).norm() == 0.0)
+    throw InputError(label + ": /markups/0/controlPoints",
+                     "the entry and the target are the same point: the trajectory has no direction");
+  return {points[0].position, points[1].position, markups.frame};
 }
 
 }  // namespace
 
 MarkupsTrajectory read_markups_trajectory(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), "cannot read the markups file");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return parse_markups_trajectory(text, file.string());
+  return trajectory_of(read_markups(file), file.string());
 }
 
 MarkupsTrajectory parse_markups_trajectory(const std::string& text, const std::string& label) {
-  json root;
-  try {
-    root = json::parse(text);
-  } catch (const json::exception& e) {  // a syntax error, or a number out of range (out_of_range.406)
-    throw InputError(label, fmt::format("not a 3D Slicer markups file (.mrk.json): {}", e.what()));
-  }
-  const auto markups = root.find("markups");
-  if (!root.is_object() || markups == root.end() || !markups->is_array() || markups->empty() ||
-      !(*markups)[0].is_object())
-    throw InputError(label, "not a 3D Slicer markups file: no \"markups\" list (save a line or a point list from "
-                            "Slicer's Markups module as .mrk.json)");
-  const json& markup = (*markups)[0];
-  const std::string at = label + ": /markups/0";
-  const std::string type = text_member(markup, "type", "", at);
-  const std::string frame = text_member(markup, "coordinateSystem", "LPS", at);  // the schema's default
-  if (frame != "LPS" && frame != "RAS")
-    throw InputError(label + ": /markups/0/coordinateSystem",
-                     fmt::format("\"{}\" is not a frame mtled knows: \"LPS\" or \"RAS\"", frame));
-  const std::string units = text_member(markup, "coordinateUnits", "mm", at);
-  double to_metres = 0.0;
-  if (units == "mm") to_metres = 1e-3;
-  if (units == "um") to_metres = 1e-6;
-  if (to_metres == 0.0)
-    throw InputError(label + ": /markups/0/coordinateUnits",
-                     fmt::format("\"{}\" is not a unit mtled reads: \"mm\" or \"um\"", units));
-  std::vector<Vec3> points;
-  const auto control = markup.find("controlPoints");
-  if (control != markup.end() && control->is_array())
-    for (std::size_t i = 0; i < control->size() && points.size() < 2; ++i) {
-      const json& point = (*control)[i];
-      const std::string where = fmt::format("{}/controlPoints/{}", at, i);
-      if (!point.is_object() || text_member(point, "positionStatus", "defined", where) != "defined") continue;
-      points.push_back(to_metres * markup_position(point, where));
-    }
-  if (points.size() < 2)
-    throw InputError(label + ": /markups/0/controlPoints",
-                     fmt::format("the {} has {} placed control point{}; a needle trajectory needs two, the entry and "
-                                 "then the target (a Line markup, or a point list's first two points)",
-                                 type.empty() ? "markup" : type, points.size(), points.size() == 1 ? "" : "s"));
-  if ((points[1] - points[0]).norm() == 0.0)
-    throw InputError(label + ": /markups/0/controlPoints",
-                     "the entry and the target are the same point: the trajectory has no direction");
-  return {points[0], points[1], frame};
+  return trajectory_of(parse_markups(text, label), label);
 }
 
 NeedlePath read_needle_path(const Parameters& p) {
@@ -159,9 +112,8 @@ double spacing_at_entry(const NeedlePath& path, const ModelView& model) {
 void place_needle_path(NeedlePath& path, const ModelView& model, const Parameters& p) {
   const std::string& mesh_frame = model.mesh().coordinate_system;
   if (!path.frame.empty() && !mesh_frame.empty() && path.frame != mesh_frame) {
-    const Vec3 flip(-1.0, -1.0, 1.0);  // LPS <-> RAS
-    path.entry = path.entry.cwiseProduct(flip);
-    path.direction = path.direction.cwiseProduct(flip);
+    path.entry = flip_lps_ras(path.entry);
+    path.direction = flip_lps_ras(path.direction);
     path.frame = mesh_frame;
   }
   const bool from_markups = !path.frame.empty();

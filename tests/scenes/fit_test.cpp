@@ -70,16 +70,15 @@ json compression_fit(const std::string& data) {
 
 // Synthesizes data at the fit file's start values (noise seeded with `seed`) into folder/truth, then fits them from
 // `starts` (pointer=value overrides on the fit file) into folder/fit.
-json synthesize_then_fit(const fs::path& folder, const fs::path& fit_file, const std::string& template_data, int seed,
-                         const std::vector<std::string>& starts) {
+json synthesize_then_fit(const fs::path& folder, const fs::path& fit_file, const std::string& template_data,
+                         const std::string& data_pointer, int seed, const std::vector<std::string>& starts) {
   const auto made =
       run_mtled({"fit", fit_file.string(), "-o", (folder / "truth").string(), "--synthesize", std::to_string(seed)});
   EXPECT_EQ(made.exit_code, 0) << made.output;
   const fs::path data = folder / "truth" / "data" / template_data;
   EXPECT_TRUE(fs::exists(data)) << made.output;
-  std::vector<std::string> args = {"fit",   fit_file.string(),
-                                   "-o",    (folder / "fit").string(),
-                                   "--set", "/experiments/0/data=\"" + data.string() + "\""};
+  std::vector<std::string> args = {
+      "fit", fit_file.string(), "-o", (folder / "fit").string(), "--set", data_pointer + "=\"" + data.string() + "\""};
   for (const auto& s : starts) args.insert(args.end(), {"--set", s});
   const auto fitted = run_mtled(args);
   EXPECT_EQ(fitted.exit_code, 0) << fitted.output;
@@ -106,8 +105,9 @@ TEST(Fit, RecoversOgdenMuAndAlphaFromACompressionForceCurve) {
   std::map<std::string, std::vector<double>> values, errors;
   for (const int seed : {1, 2, 3, 4}) {
     // Starts 40% off the truth.
-    const json report = synthesize_then_fit(folder / std::to_string(seed), folder / "fit.json", "compression.csv", seed,
-                                            {"/parameters/0/start=433.2", "/parameters/1/start=-1.82"});
+    const json report =
+        synthesize_then_fit(folder / std::to_string(seed), folder / "fit.json", "compression.csv",
+                            "/experiments/0/data", seed, {"/parameters/0/start=433.2", "/parameters/1/start=-1.82"});
     ASSERT_TRUE(report.is_object());
     EXPECT_EQ(report["status"], "converged") << report.dump(2);
     EXPECT_TRUE(report["not_identifiable"].empty()) << report.dump(2);
@@ -147,8 +147,8 @@ TEST(Fit, ReportsAParameterTheDataDoNotDependOnAsNotIdentifiable) {
   fit["parameters"][1] = {
       {"name", "density"}, {"pointer", "/materials/0/density"}, {"lower", 500}, {"upper", 2000}, {"start", 1000}};
   write_text(folder / "fit.json", fit.dump(2));
-  const json report =
-      synthesize_then_fit(folder, folder / "fit.json", "compression.csv", 7, {"/parameters/0/start=433.2"});
+  const json report = synthesize_then_fit(folder, folder / "fit.json", "compression.csv", "/experiments/0/data", 7,
+                                          {"/parameters/0/start=433.2"});
   ASSERT_TRUE(report.is_object());
   bool density_named = false;
   for (const auto& line : report["not_identifiable"]) density_named |= line.get<std::string>().rfind("density", 0) == 0;
@@ -157,23 +157,34 @@ TEST(Fit, ReportsAParameterTheDataDoNotDependOnAsNotIdentifiable) {
   EXPECT_LT(std::abs(mu - 722.0), 0.02 * 722.0);
 }
 
-// The paper's X-ray experiment in small: markers around the needle's path in a small gel cylinder, their
+// The paper's X-ray experiment in small: 36 markers around the needle's path in a small gel cylinder, their
 // displacements at a depth of 4 mm "measured" with 0.05 mm noise; C_D fitted from 0.24 (40% below the truth, 0.4).
-TEST(Fit, RecoversTheDeformationCoefficientFromMarkers) {
-  const fs::path folder = scratch_dir("fit-markers");
+// The markers come as a CSV file, or as two 3D Slicer point lists (before and after, matched by label, in mm).
+class FitMarkers : public ::testing::TestWithParam<bool> {};
+
+TEST_P(FitMarkers, RecoverTheDeformationCoefficient) {
+  const bool slicer = GetParam();
+  const fs::path folder = scratch_dir(slicer ? "fit-markups" : "fit-markers");
   json needle = {{"type", "kinematic"},     {"diameter", 0.0016}, {"entry", {0, 0, 0.008}},
                  {"direction", {0, 0, -1}}, {"depth", 0.004},     {"deformation_coefficient", 0.4},
                  {"puncture_strain", 1e-5}};
   write_text(folder / "gel.json", gel_cylinder_scene(0.008, needle).dump(2));
-  std::string markers = "label,x_m,y_m,z_m,ux_m,uy_m,uz_m\n";
-  int n = 0;
+  std::string csv = "label,x_m,y_m,z_m,ux_m,uy_m,uz_m\n";
+  json points = json::array();
   for (const double r : {0.0015, 0.0025, 0.0035, 0.0045})
     for (const double z : {0.0035, 0.005, 0.0065})
       for (int k = 0; k < 3; ++k) {
         const double a = 2.0 * M_PI * (k + 0.37 * r / 0.001) / 3.0;
-        markers += fmt::format("m{},{},{},{},0,0,0\n", ++n, r * std::cos(a), r * std::sin(a), z);
+        const std::string label = fmt::format("m{}", points.size() + 1);
+        csv += fmt::format("{},{},{},{},0,0,0\n", label, r * std::cos(a), r * std::sin(a), z);
+        points.push_back({{"label", label}, {"position", {1e3 * r * std::cos(a), 1e3 * r * std::sin(a), 1e3 * z}}});
       }
-  write_text(folder / "markers.csv", markers);
+  ASSERT_EQ(points.size(), 36u);
+  const json markups = {{"markups", {{{"type", "Fiducial"}, {"coordinateSystem", "RAS"}, {"controlPoints", points}}}}};
+  write_text(folder / "markers.csv", csv);
+  write_text(folder / "before.mrk.json", markups.dump(2));
+  write_text(folder / "after.mrk.json", markups.dump(2));  // a template: --synthesize moves the points
+  const json data = slicer ? json{{"before", "before.mrk.json"}, {"after", "after.mrk.json"}} : json("markers.csv");
   const json fit = {
       {"parameters",
        {{{"name", "C_D"},
@@ -182,17 +193,22 @@ TEST(Fit, RecoversTheDeformationCoefficientFromMarkers) {
          {"upper", 0.9},
          {"start", 0.4}}}},
       {"experiments",
-       {{{"name", "xray"}, {"scene", "gel.json"}, {"data", "markers.csv"}, {"compare", "markers"}, {"sigma", 5e-5}}}},
+       {{{"name", "xray"}, {"scene", "gel.json"}, {"data", data}, {"compare", "markers"}, {"sigma", 5e-5}}}},
       {"threads", 2}};
   write_text(folder / "fit.json", fit.dump(2));
-  const json report = synthesize_then_fit(folder, folder / "fit.json", "markers.csv", 7, {"/parameters/0/start=0.24"});
+  const json report = synthesize_then_fit(folder, folder / "fit.json", slicer ? "after.mrk.json" : "markers.csv",
+                                          slicer ? "/experiments/0/data/after" : "/experiments/0/data", 7,
+                                          {"/parameters/0/start=0.24"});
   ASSERT_TRUE(report.is_object());
-  EXPECT_EQ(n, 36);
   const json& c_d = parameter(report, "C_D");
   const double v = c_d["value"].get<double>(), se = c_d["standard_error"].get<double>();
   EXPECT_LT(std::abs(v - 0.4), 0.01) << c_d.dump();
   EXPECT_LT(std::abs(v - 0.4), 2.0 * se) << c_d.dump();
+  EXPECT_EQ(report["experiments"][0]["data_count"], 108);
 }
+
+INSTANTIATE_TEST_SUITE_P(Fit, FitMarkers, ::testing::Bool(),
+                         [](const auto& test) { return test.param ? "FromSlicerPointLists" : "FromACsvFile"; });
 
 // Every problem of a fit file and its data in one message, each naming the file and line; nothing runs.
 TEST(Fit, BadInputIsReportedBeforeAnyRun) {

@@ -32,12 +32,13 @@ struct Parameter {
   // The unit interval the methods search in, and back.
   double scaled(double value) const;
   double value(double scaled) const;
+  double slope(double value) const;  // d value / d scaled at the value
 };
 
 enum class Quantity { needle_force, reaction_force, markers };
 
 // One measured datum: where it was measured (a depth, a displacement, a marker's reference position), the
-// measured value, its standard deviation, and the file line it came from (for messages).
+// measured value, its standard deviation, and where in which file it came from (for messages).
 struct Datum {
   double abscissa = 0.0;         // needle_force: depth (m); reaction_force: the set's displacement (m)
   Vec3 position = Vec3::Zero();  // markers: reference position (m)
@@ -45,14 +46,16 @@ struct Datum {
   std::string label;             // markers: the marker's label
   double value = 0.0;
   double sigma = 1.0;
-  int line = 0;
+  std::string source;  // "data.csv:12", or "after.mrk.json: /markups/0/controlPoints/3"
 };
 
 struct Experiment {
   std::string name;
-  std::string where;  // its place in the fit file, for messages
-  std::filesystem::path scene, data_file;
-  json set = json::object();  // its own scene overrides, applied before the parameters
+  std::string where;                       // its place in the fit file, for messages
+  std::filesystem::path scene, data_file;  // markers from 3D Slicer: data_file the "after" markups file
+  std::filesystem::path markups_before;    // ... and this the "before" one (empty for a CSV file)
+  std::string markups_frame;               // their frame ("LPS", "RAS"), put into the mesh's when it records one
+  json set = json::object();               // its own scene overrides, applied before the parameters
   Quantity quantity = Quantity::needle_force;
   std::string set_name;         // reaction_force: the constrained set
   int component = 2;            // reaction_force: the force and displacement component
@@ -143,11 +146,11 @@ class Evaluator {
                                    const std::string& purpose);
   const std::vector<Evaluation>& history() const { return history_; }
   int runs_at_once() const { return at_once_; }
-  int threads_per_run() const { return threads_per_run_; }
+  int threads() const { return threads_; }
 
  private:
-  std::vector<std::string> arguments(const Evaluation& e, std::size_t experiment,
-                                     const std::filesystem::path& folder) const;
+  std::vector<std::string> arguments(const Evaluation& e, std::size_t experiment, const std::filesystem::path& folder,
+                                     int threads) const;
   void measure(Evaluation& e, std::span<const RunOutcome> outcomes);
   Evaluation finish(Evaluation e);
   const Plan& plan_;
@@ -156,7 +159,7 @@ class Evaluator {
   std::string log_level_;
   std::unique_ptr<PluginCatalog> catalog_;
   std::vector<Evaluation> history_;
-  int at_once_ = 1, threads_per_run_ = 1;
+  int at_once_ = 1, threads_ = 1;  // runs at once at most, and the threads they share
 };
 
 // Writes each experiment's mesh once (when it is generated and no parameter changes it) so that every forward run
