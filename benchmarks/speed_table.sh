@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The speed table of docs/performance.md on this machine: the CPU and its instruction set, the memory bandwidth a
+# The speed table of docs/performance.md, measured where it runs: the CPU and its ISA, the memory bandwidth a
 # copy reaches on 1 and 2 threads (the probe the kernel is measured against), then the default scene (whole run) and
 # the brain phantom (first 200 steps; FULL=1 for the whole 100 mm run) on 2 threads, in single (the default) and double
 # precision, and, given a second build (an older commit built in its own worktree), the same runs of it side by side.

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The GPU checks and the benchmark, run from a bundle (scripts/gpu-bundle.sh) on a machine with an NVIDIA GPU:
 # the GPU tests (the cuda backend against the CPU engine), then the default scene and the brain phantom (200 steps
-# and the full 100 mm run) on the GPU in double and single precision and on this machine's CPU cores beside them,
+# and the full 100 mm run) on the GPU in double and single precision and on the host's CPU cores beside them,
 # and one table. Its output, with the date and the GPU, goes into docs/performance.md each time it runs on a GPU.
 # Usage: gpu-check.sh BUNDLE [WORK_DIR]          (about 6 minutes on one H100 and 16 cores; CPU_FULL_RUN_LIMIT_S,
 #        default 180, bounds the brain phantom's full run on the CPU, 0 leaves it out)

@@ -1,6 +1,6 @@
 // The cuda backend against the CPU engine, where a GPU is (label gpu; each test is skipped, not failed, without one):
 // the same forces to round-off in both precisions, the same answer on every run (no floating-point atomics), and a
-// whole needle insertion equal to the CPU's within the bounds.
+// whole needle insertion equal to the CPU's within round-off bounds (below).
 #include <gtest/gtest.h>
 
 #include <random>
@@ -15,7 +15,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The backend, or null when this machine has no usable device (the test then skips).
+// The backend, or null when no usable device is present (the test then skips).
 std::shared_ptr<StepEngine> cuda_engine() {
   try {
     return test::make<StepEngine>("cuda", json::object());
@@ -108,7 +108,7 @@ TEST(CudaBackend, DisplacementAtBringsTheNodesAskedFor) {
 
 // A needle insertion into a gel block through the mtled executable (the mesh written by the test: GPU nodes often
 // have no Gmsh): on the GPU in double precision the same steps as the CPU, NRMSE <= 1e-10 and the needle force
-// within 1e-9 (the bounds for round-off); two GPU runs byte for byte the same; in single precision the GPU
+// within 1e-9 (the bounds for round-off); two GPU runs byte for byte the same; in single precision the GPU
 // within the single-precision bounds of the CPU's double run (NRMSE 1e-6, force 1e-5).
 TEST(CudaBackend, ANeedleRunEqualsTheCpusAndRepeatsExactly) {
   if (!cuda_engine()) GTEST_SKIP() << "no CUDA device";

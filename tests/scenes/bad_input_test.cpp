@@ -1,4 +1,4 @@
-// Bad input through the mtled executable (issue 6): every case of tests/scenes/bad/cases.json must exit
+// Bad input through the mtled executable: every case of tests/scenes/bad/cases.json must exit
 // with its code (2: invalid input), print the expected message fragments (the file and line or the JSON
 // pointer, the allowed range, a suggestion), show no crash or stack trace, and leave nothing in the output
 // folder that looks like a successful run. One GoogleTest case per entry, so ctest lists them one by one.

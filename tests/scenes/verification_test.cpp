@@ -90,7 +90,7 @@ double top_stress_error(const UniaxialCase& c, const std::string& name, const st
   return computed / exact - 1.0;
 }
 
-// Issue 3's acceptance: the nominal stress from the top face's reaction over the undeformed area is within 1%
+// The acceptance bound: the nominal stress from the top face's reaction over the undeformed area is within 1%
 // of the exact solution. With consistent integration (the default) a homogeneous deformation is reproduced
 // exactly by the discrete equations, so what is left is the relaxation's stop at 1e-7 of the displacement:
 // the tighter 1e-4 bound checks that, with a wide margin over it.
@@ -103,8 +103,8 @@ TEST_P(UniaxialCube, TopForceMatchesTheExactHomogeneousSolution) {
 
 // Single-precision rows (/discretisation/precision = "single") round each shape-function gradient by 2^-24 (6e-8):
 // the discrete equations then reproduce the homogeneous state to that order times the support's conditioning, so
-// the force stays within 1e-6 of the exact one (the bound issue 29 sets; measured 2e-9 on these cubes and at most
-// 1.9e-7 over the stability study, nu = 0.4999 included).
+// the force stays within 1e-6 of the exact one (the bound single precision must meet; measured 2e-9 on these cubes
+// and at most 1.9e-7 over the stability study, nu = 0.4999 included).
 TEST_P(UniaxialCube, SinglePrecisionRowsKeepTheExactForceToAMillionth) {
   const double error =
       std::abs(top_stress_error(GetParam(), "uniaxial_single", {"--set", "/discretisation/precision=\"single\""}));
@@ -118,8 +118,8 @@ INSTANTIATE_TEST_SUITE_P(ShippedScenes, UniaxialCube,
                                                         neo_hookean(1000.0, 4.02684e-5)}));
 
 // Single-precision rows on a needle insertion (the gel cylinder, 5 mm, captures and the shaft's constraints): against
-// the double-precision run, the displacements within NRMSE 1e-6 and the needle force within 1e-5 relative (issue 29's
-// bounds; the rows' rounding, 6e-8 per gradient, measured 6.5e-9 and 2.8e-9 on the default scene).
+// the double-precision run, the displacements within NRMSE 1e-6 and the needle force within 1e-5 relative (the bounds
+// single precision must meet; the rows' rounding, 6e-8 per gradient, measured 6.5e-9 and 2.8e-9 on the default scene).
 TEST(SinglePrecisionRows, ANeedleInsertionAgreesWithDouble) {
   const fs::path folder = scratch_dir("single_needle");
   const json needle = {{"type", "kinematic"}, {"diameter", 1.6e-3}, {"entry", {0.0, 0.0, 8e-3}},

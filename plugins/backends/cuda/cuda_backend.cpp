@@ -323,7 +323,7 @@ class CudaBackend final : public StepEngine {
                          "CPU instead: leave out /backend, or --backend cpu",
                          status != cudaSuccess ? cudaGetErrorString(status) : "none found"));
     if (device_ >= count)
-      refuse(fmt::format("/device = {} but this machine has {} CUDA device(s), numbered from 0", device_, count));
+      refuse(fmt::format("/device = {} but {} CUDA device(s) are present, numbered from 0", device_, count));
     check(cudaSetDevice(device_), "cudaSetDevice");
     cudaDeviceProp properties{};
     check(cudaGetDeviceProperties(&properties, device_), "cudaGetDeviceProperties");
