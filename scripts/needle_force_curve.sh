@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # The default scene's force against depth in equilibrium (needle.csv with 10 relaxed increments) against runs
 # stopped at each depth and relaxed there (the load ramp at the same rate), and the transient the relaxation
-# records along the way. The ramp is RAMP (default 4) times slower than the scene's: the kinematic needle
-# captures tissue while the load ramps, and at the scene's own rate the tissue near the surface has not caught
-# up when it is captured, so the answer at shallow depth depends on where the ramp pauses (docs/validation.md).
-# Also runs the scene as shipped (its transient is the old needle.csv). Prints a table; about 5 minutes on 2
-# cores. Usage: scripts/needle_force_curve.sh [OUT]   (RAMP=1 for the scene's own rate)
+# records along the way. The load ramps over 2,000 x RAMP steps for the whole 15 mm (200 x RAMP per 1.5 mm;
+# RAMP defaults to 4: 8,000 steps, 8 times slower than the shipped scene's 1,000): the kinematic needle captures
+# tissue while the load ramps, and at a fast ramp the tissue near the surface has not caught up when it is
+# captured, so the answer at shallow depth depends on where the ramp pauses (docs/validation.md). Also runs the
+# scene as shipped for its transient (needle_transient.csv). Prints a table; about 5 minutes on 2 cores.
+# Usage: scripts/needle_force_curve.sh [OUT]   (RAMP=1: 2,000 steps, half as fast as the shipped scene's ramp)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-runs/needle-force-curve}
