@@ -53,7 +53,7 @@ class SceneRun {
     try {
       const auto setup_start = Clock::now();
       simulation_ = std::make_unique<Simulation>(scene_, catalog_);
-      add_scene_monitors(*simulation_, scene_);
+      folded_ = add_scene_monitors(*simulation_, scene_);
       if (auto failure = injected_failure()) simulation_->add_monitor(failure);
       writers_ = add_scene_writers(*simulation_, scene_, folder_);
       writers_.push_back(std::make_shared<ProgressWriter>(progress, interrupted));
@@ -101,9 +101,11 @@ class SceneRun {
     for (const auto& writer : writers_) writer->finish(last);
     record(seconds_since(solve_start_));
     const bool inverted = e.diagnostic().what == "inverted_material";
+    std::vector<CellField> folds;
+    if (folded_ && !folded_->per_tet.empty()) folds.push_back({"folded", 1, folded_->per_tet});
     write_state(folder_, "last_good_state.vtu", simulation_->model().view(),
                 inverted ? simulation_->previous_displacement() : simulation_->displacement(),
-                scene_.section("output"), false);
+                scene_.section("output"), false, folds);
     summary_.record_instability(e.diagnostic(), "last_good_state.vtu");
     summary_.write();
     log().error("{}", e.what());
@@ -145,6 +147,7 @@ class SceneRun {
   Clock::time_point solve_start_ = Clock::now();
   double setup_time_ = 0.0;
   std::unique_ptr<Simulation> simulation_;
+  std::shared_ptr<const FoldedTets> folded_;  // marked by the inversion check when it stops the run
   std::vector<std::shared_ptr<OutputWriter>> writers_;
 };
 

@@ -172,10 +172,12 @@ std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulat
 // ---- the final state and the summary
 
 std::vector<double> write_state(const OutputFolder& folder, const std::string& file, const ModelView& model,
-                                std::span<const double> u, const Parameters& output, bool with_cell_data) {
+                                std::span<const double> u, const Parameters& output, bool with_cell_data,
+                                const std::vector<CellField>& extra_fields) {
   std::vector<double> interpolated(u.size());
   model.interpolate(u, interpolated);
-  const auto fields = with_cell_data ? cell_fields(model, u, output.string_list("cell_data")) : std::vector<CellField>{};
+  auto fields = with_cell_data ? cell_fields(model, u, output.string_list("cell_data")) : std::vector<CellField>{};
+  fields.insert(fields.end(), extra_fields.begin(), extra_fields.end());
   folder.write_file(file, [&](std::ostream& out) { write_vtu(out, model.mesh(), interpolated, fields, vtu_style(output)); });
   return interpolated;
 }
@@ -229,13 +231,7 @@ void RunSummary::record_simulation(const Simulation& simulation, double solve_ti
   summary_["integrator"] = to_json(report);
   if (report.relaxation) summary_["integrator"]["relaxed_states"] = simulation.steady_states();
   summary_["time_step_s"] = report.time_step;
-}
-
-void RunSummary::record_result(const Simulation& simulation, std::span<const double> u) {
-  double max_displacement = 0.0;
-  for (std::size_t i = 0; i < u.size(); i += 3)
-    max_displacement = std::max(max_displacement, std::sqrt(u[i] * u[i] + u[i + 1] * u[i + 1] + u[i + 2] * u[i + 2]));
-  summary_["max_displacement_m"] = max_displacement;
+  // Where the needle got to, on every outcome: a run stopped unstable keeps the depth and force it reached.
   if (const auto* needle = simulation.needle()) {
     const NeedleStatus s = needle->status();
     summary_["needle"] = {{"final_depth_m", s.depth},
@@ -244,6 +240,13 @@ void RunSummary::record_result(const Simulation& simulation, std::span<const dou
                           {"phase", to_string(s.phase)},
                           {"driven_nodes", s.driven_nodes}};
   }
+}
+
+void RunSummary::record_result(const Simulation& simulation, std::span<const double> u) {
+  double max_displacement = 0.0;
+  for (std::size_t i = 0; i < u.size(); i += 3)
+    max_displacement = std::max(max_displacement, std::sqrt(u[i] * u[i] + u[i + 1] * u[i + 1] + u[i + 2] * u[i + 2]));
+  summary_["max_displacement_m"] = max_displacement;
   json reactions = json::object();
   for (const auto* set : simulation.constraint_sets()) reactions[set->name] = vec_json(set->total_reaction());
   summary_["final_reactions_N"] = reactions;

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 
+#include "mtled/instability.hpp"
 #include "mtled/log.hpp"
 #include "mtled/model_view.hpp"
-#include "mtled/instability.hpp"
 
 namespace mtled {
 
@@ -15,26 +15,29 @@ void InversionMonitor::declare(ComponentDeclaration& d) {
       .defaults(100)
       .non_negative()
       .unit("1")
-      .doc("move the background tets by the interpolated displacements at their vertices every this many steps and "
-           "after the last, and find those turned inside out: material folded between integration points, which no "
-           "point's J shows; 0 turns the check off");
+      .doc(
+          "move the background tets by the interpolated displacements at their vertices every this many steps and "
+          "after the last, and find those turned inside out: material folded between integration points, which no "
+          "point's J shows; 0 turns the check off");
   d.string("inversion")
       .defaults("stop")
       .choices({"warn", "stop"})
-      .doc("what background tets turned inside out away from the needle's path do: \"stop\" ends the run (status "
-           "\"unstable\", what \"inverted_between_points\"); \"warn\" logs the first and records them in summary.json "
-           "(monitors.inversion). Tets around the needle's path (a vertex within the needle's radius plus that node's "
-           "support radius of the swept shaft) fold because the kinematic needle cannot cut the tissue: they are "
-           "counted as cut (monitors.inversion.cut_tets), not folds. Slivers (radius ratio under 0.1; the shipped "
-           "scenes' meshes have none) are not judged: they turn over when the interpolated field departs from affine by "
-           "their thickness, which a relaxation's transient does without the material folding "
-           "(monitors.inversion.slivers_inverted)");
+      .doc(
+          "what background tets turned inside out away from the needle's path do: \"stop\" ends the run (status "
+          "\"unstable\", what \"inverted_between_points\"); \"warn\" logs the first and records them in summary.json "
+          "(monitors.inversion). Tets around the needle's path (a vertex within the needle's radius plus that node's "
+          "support radius of the swept shaft) fold because the kinematic needle cannot cut the tissue: they are "
+          "counted as cut (monitors.inversion.cut_tets), not folds. Slivers (radius ratio under 0.1; the shipped "
+          "scenes' meshes have none) are not judged: they turn over when the interpolated field departs from affine by "
+          "their thickness, which a relaxation's transient does without the material folding "
+          "(monitors.inversion.slivers_inverted)");
 }
 
-std::unique_ptr<InversionMonitor> InversionMonitor::from_section(const Parameters& monitors) {
+std::unique_ptr<InversionMonitor> InversionMonitor::from_section(const Parameters& monitors, FoldAdvice advice,
+                                                                 std::shared_ptr<FoldedTets> folded) {
   const long every = monitors.integer("inversion_every_steps");
   if (every == 0) return nullptr;
-  return std::make_unique<InversionMonitor>(every, monitors.string("inversion") == "stop");
+  return std::make_unique<InversionMonitor>(every, monitors.string("inversion") == "stop", advice, std::move(folded));
 }
 
 namespace {
@@ -49,7 +52,8 @@ bool in_needle_zone(const ModelView& model, Index t, const NeedleStatus& needle)
   for (const Index v : mesh.tets[t]) {
     const Vec3& x = mesh.points[v];
     const double along = std::clamp(needle.direction.dot(x - needle.entry), 0.0, needle.depth);
-    if ((x - (needle.entry + along * needle.direction)).norm() <= needle.radius + model.support_radius()[v]) return true;
+    if ((x - (needle.entry + along * needle.direction)).norm() <= needle.radius + model.support_radius()[v])
+      return true;
   }
   return false;
 }
@@ -68,6 +72,7 @@ void InversionMonitor::check(const StepRecord& step) {
       sliver_[static_cast<std::size_t>(t)] = tet_radius_ratio(model.mesh(), t) < kSliverRadiusRatio;
   }
   interpolated_.resize(step.u.size());
+  ratios_.resize(static_cast<std::size_t>(model.mesh().tet_count()));
   model.interpolate(step.u, interpolated_);
   const auto& mesh = model.mesh();
   const auto moved = [&](Index node) {
@@ -83,6 +88,7 @@ void InversionMonitor::check(const StepRecord& step) {
     const Vec3 a = moved(v[0]);
     const double volume = (moved(v[1]) - a).cross(moved(v[2]) - a).dot(moved(v[3]) - a) / 6.0;
     const double ratio = volume / tet_volume(mesh, t);
+    ratios_[static_cast<std::size_t>(t)] = ratio;
     if (ratio <= 0.0 && needle && in_needle_zone(model, t, *step.needle)) {
       ++cut;
       continue;
@@ -111,35 +117,87 @@ void InversionMonitor::check(const StepRecord& step) {
     first_node_ = node;
     first_position_ = mesh.points[node];
   }
+  if (stop_) stop(step, worst, smallest, node, moved(node) - mesh.points[node]);
   if (!stop_) {
     if (first)
-      log().warn("step {}: {} background tets turned inside out away from the needle (the worst {:.3g} times its "
-                 "volume, around node {} at {} m): material folded between integration points; /monitors/inversion "
-                 "= \"stop\" ends such runs",
-                 step.step, inverted, smallest, node, point_text(mesh.points[node]));
+      log().warn(
+          "step {}: {} background tets turned inside out away from the needle (the worst {:.3g} times its "
+          "volume, around node {} at {} m): material folded between integration points; /monitors/inversion "
+          "= \"stop\" ends such runs",
+          step.step, inverted, smallest, node, point_text(mesh.points[node]));
     return;
+  }
+}
+
+std::string InversionMonitor::lever(const NeedleStatus* needle, double radial, bool pushed_by_boundary) const {
+  if (!needle || pushed_by_boundary)
+    return "a boundary condition pushes single nodes through the tissue: drive a surface or material points instead, "
+           "or refine the mesh where it pushes";
+  if (advice_.needle_drives_nodes)
+    return "the needle drives single nodes: drive material points on the shaft's surface instead "
+           "(/needle/driven \"shaft_surface\")";
+  // Measured on the brain phantom (docs/stability.md): a cloud refined along the path folds earlier, not later, and a
+  // slower ramp only delays it; the needle's drag shears the sleeve beside the shaft past what a cloud can follow.
+  if (radial < 0.02)
+    return fmt::format(
+        "the needle's drag has sheared the tissue beside its shaft past what the cloud can follow; "
+        "refining the cloud along the path makes it fold earlier, not later (docs/stability.md){}. "
+        "Stop the insertion before this depth (/needle/depth), or ramp slower (/integrator/load_steps) "
+        "to delay it a little",
+        advice_.refined_along ? ": coarsen the refinement (/mesh/refine_ratio closer to 1)" : "");
+  return "a driver pushes the material through itself away from the needle: drive a surface or material points "
+         "there instead, or refine the mesh where it pushes";
+}
+
+void InversionMonitor::stop(const StepRecord& step, Index worst, double smallest, Index node, Vec3 moved_by) const {
+  const ModelView& model = *step.model;
+  const TetMesh& mesh = model.mesh();
+  const NeedleStatus* needle = step.needle && step.needle->depth > 0.0 ? &*step.needle : nullptr;
+  if (folded_) {  // last_good_state.vtu's "folded": the tets this check found turned over
+    folded_->per_tet.assign(static_cast<std::size_t>(mesh.tet_count()), 0.0);
+    for (Index t = 0; t < mesh.tet_count(); ++t)
+      if (ratios_[static_cast<std::size_t>(t)] <= 0.0)
+        folded_->per_tet[static_cast<std::size_t>(t)] = needle && in_needle_zone(model, t, *needle) ? 0.5
+                                                        : sliver_[static_cast<std::size_t>(t)]      ? 0.0
+                                                                                                    : 1.0;
+  }
+  // A vertex of the folded tet in a set a boundary condition drives (not the needle's): that condition pushes it.
+  bool pushed_by_boundary = false;
+  for (const NodalConstraints* set : step.constraint_sets)
+    if (set->name != "needle")
+      for (const Index v : mesh.tets[worst])
+        pushed_by_boundary |= std::find(set->nodes().begin(), set->nodes().end(), v) != set->nodes().end();
+  std::string where;
+  double radial = 0.0;
+  if (needle) {
+    const Vec3 x = tet_centroid(mesh, worst) - needle->entry;
+    const double axial = needle->direction.dot(x);
+    radial = (x - axial * needle->direction).norm();
+    where = fmt::format(
+        " at a needle depth of {:.1f} mm, {:.1f} mm from the needle's axis and {:.1f} mm under its "
+        "entry,",
+        1e3 * needle->depth, 1e3 * radial, 1e3 * axial);
   }
   throw node_instability(
       step.step, step.time, "inverted_between_points",
-      fmt::format("background tet {} is turned inside out by the interpolated displacements (moved volume {:.3g} "
-                  "times its reference volume), away from the needle's path: the material folded between "
-                  "integration points around node {}, which moved {:.3g} mm; a driver pushes single nodes through the "
-                  "tissue. Drive material points or a surface instead (the kinematic needle's \"driven\": "
-                  "\"shaft_surface\"), refine the mesh where it pushes, or set /monitors/inversion to \"warn\"",
-                  worst, smallest, node, 1e3 * (moved(node) - mesh.points[node]).norm()),
+      fmt::format("background tet {} is turned inside out by the interpolated displacements{} away from the needle's "
+                  "zone (moved volume {:.3g} times its reference volume; node {} moved {:.3g} mm): the material folded "
+                  "between integration points. To go on: {}; or set /monitors/inversion to \"warn\" to finish and "
+                  "record the folds (last_good_state.vtu marks them in its cell field \"folded\")",
+                  worst, where, smallest, node, 1e3 * moved_by.norm(), lever(needle, radial, pushed_by_boundary)),
       model, node);
 }
 
 json InversionMonitor::report() const {
   json record = {{"every_steps", every_},
-          {"checks", checks_},
-          {"action", stop_ ? "stop" : "warn"},
-          {"inverted_tets", inverted_tets_},
-          {"cut_tets", cut_tets_},
-          {"slivers", std::count(sliver_.begin(), sliver_.end(), 1)},
-          {"slivers_inverted", slivers_inverted_},
-          {"smallest_volume_ratio", std::isfinite(smallest_ratio_) ? json(smallest_ratio_) : json(nullptr)},
-          {"smallest_volume_ratio_step", smallest_at_}};
+                 {"checks", checks_},
+                 {"action", stop_ ? "stop" : "warn"},
+                 {"inverted_tets", inverted_tets_},
+                 {"cut_tets", cut_tets_},
+                 {"slivers", std::count(sliver_.begin(), sliver_.end(), 1)},
+                 {"slivers_inverted", slivers_inverted_},
+                 {"smallest_volume_ratio", std::isfinite(smallest_ratio_) ? json(smallest_ratio_) : json(nullptr)},
+                 {"smallest_volume_ratio_step", smallest_at_}};
   if (inverted_tets_ > 0)
     record["first_inverted"] = {{"step", first_inverted_at_},
                                 {"node", first_node_},

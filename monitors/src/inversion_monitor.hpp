@@ -12,20 +12,31 @@
 // it once and records it in summary.json.
 #include <cmath>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "mtled/monitor.hpp"
+#include "mtled/monitors/scene_monitors.hpp"
 #include "mtled/parameters.hpp"
 
 namespace mtled {
+
+// What the message of a fold may advise, from what the scene already does: never a lever it already uses.
+struct FoldAdvice {
+  bool needle_drives_nodes = false;  // the kinematic needle drives nodes, not material points on the shaft's surface
+  bool refined_along = false;  // the mesh source refines the cloud along a segment (a Gmsh generator's refine_from)
+};
 
 class InversionMonitor final : public StepMonitor {
  public:
   // Its parameters in the scene's "monitors" section.
   static void declare(ComponentDeclaration& d);
-  // The monitor the section asks for; null when inversion_every_steps is 0.
-  static std::unique_ptr<InversionMonitor> from_section(const Parameters& monitors);
-  InversionMonitor(long every, bool stop) : every_(every), stop_(stop) {}
+  // The monitor the section asks for; null when inversion_every_steps is 0. When it stops a run it marks the folded
+  // tets in `folded`.
+  static std::unique_ptr<InversionMonitor> from_section(const Parameters& monitors, FoldAdvice advice,
+                                                        std::shared_ptr<FoldedTets> folded);
+  InversionMonitor(long every, bool stop, FoldAdvice advice = {}, std::shared_ptr<FoldedTets> folded = nullptr)
+      : every_(every), stop_(stop), advice_(advice), folded_(std::move(folded)) {}
   std::string name() const override { return "inversion"; }
   void after_step(const StepRecord& step) override {
     if (reads_displacement(step.step)) check(step);
@@ -38,17 +49,23 @@ class InversionMonitor final : public StepMonitor {
 
  private:
   void check(const StepRecord& step);
+  // The stop: where the fold is against the needle, how far it went, and the lever that applies.
+  [[noreturn]] void stop(const StepRecord& step, Index worst, double smallest, Index node, Vec3 moved_by) const;
+  std::string lever(const NeedleStatus* needle, double radial, bool pushed_by_boundary) const;
 
   long every_;
   bool stop_;
+  FoldAdvice advice_;
+  std::shared_ptr<FoldedTets> folded_;  // filled when the check stops a run (last_good_state.vtu's "folded")
   long checks_ = 0, last_checked_ = -1, inverted_tets_ = 0, first_inverted_at_ = 0;
-  long cut_tets_ = 0;  // the most inverted tets the needle's shaft crossed at any check
-  long slivers_inverted_ = 0;  // the most inverted slivers at any check (not judged)
-  std::vector<char> sliver_;   // per tet: too thin to judge (radius ratio under 0.1)
+  long cut_tets_ = 0;                 // the most inverted tets the needle's shaft crossed at any check
+  long slivers_inverted_ = 0;         // the most inverted slivers at any check (not judged)
+  std::vector<char> sliver_;          // per tet: too thin to judge (radius ratio under 0.1)
   double smallest_ratio_ = INFINITY;  // the smallest moved volume over reference volume of any tet
   long smallest_at_ = 0;
   std::vector<double> interpolated_;
-  Index first_node_ = 0;  // the farthest-moved vertex of the worst tet, at the first check that found one
+  std::vector<double> ratios_;  // each tet's moved volume over its reference volume at the last check
+  Index first_node_ = 0;        // the farthest-moved vertex of the worst tet, at the first check that found one
   Vec3 first_position_ = Vec3::Zero();
 };
 

@@ -20,12 +20,30 @@ SceneSection monitors_section() {
   return {"monitors", &declaration};
 }
 
-void add_scene_monitors(Simulation& simulation, const Scene& scene) {
+namespace {
+
+// What the scene already does, so that a fold's message never advises it.
+FoldAdvice fold_advice(const Scene& scene) {
+  FoldAdvice advice;
+  if (scene.needle) {
+    const Parameters& needle = scene.needle->parameters;
+    advice.needle_drives_nodes = needle.has("driven") && needle.string("driven") != "shaft_surface";
+  }
+  advice.refined_along = scene.mesh.parameters.has("refine_from");  // the Gmsh generators' refinement
+  return advice;
+}
+
+}  // namespace
+
+std::shared_ptr<const FoldedTets> add_scene_monitors(Simulation& simulation, const Scene& scene) {
   const Parameters& monitors = scene.section("monitors");
   simulation.add_monitor(std::make_unique<EnergyMonitor>());
   if (auto monitor = StableStepMonitor::from_section(monitors, simulation.model().view()))
     simulation.add_monitor(std::move(monitor));
-  if (auto monitor = InversionMonitor::from_section(monitors)) simulation.add_monitor(std::move(monitor));
+  auto folded = std::make_shared<FoldedTets>();
+  if (auto monitor = InversionMonitor::from_section(monitors, fold_advice(scene), folded))
+    simulation.add_monitor(std::move(monitor));
+  return folded;
 }
 
 }  // namespace mtled

@@ -488,6 +488,27 @@ TEST(Cli, AFoldAwayFromTheNeedleStopsTheRunWhereTheNeedleCutsDoNot) {
   // The folded node lies outside the needle's zone: farther from the axis than the needle and its supports reach.
   const json& where = summary["diagnostic"]["where"][0]["coordinates_m"];
   EXPECT_GT(std::hypot(where[0].get<double>(), where[1].get<double>()), 0.003) << where.dump();
+  // The message says where the fold is against the needle and the lever that applies to this scene: its needle
+  // drives nodes, so driving the shaft's surface; summary.json keeps the depth and force the needle reached, and
+  // last_good_state.vtu marks the folded tets.
+  const std::string detail = summary["diagnostic"]["detail"].get<std::string>();
+  for (const char* part : {"at a needle depth of", "mm from the needle's axis", "mm under its entry",
+                           "/needle/driven \"shaft_surface\"", "cell field \"folded\""})
+    expect_contains(detail, part);
+  EXPECT_GT(summary["needle"]["final_depth_m"].get<double>(), 0.0) << summary.dump();
+  EXPECT_LE(summary["needle"]["final_depth_m"].get<double>(), 0.008);
+  expect_contains(test::read_text(folder / "pushed" / "last_good_state.vtu"), "Name=\"folded\"");
+
+  // Driving the shaft's surface already, the message never advises it, nor refining along the path (which folds
+  // earlier, docs/stability.md): it names the depth to stop before.
+  scene["needle"].erase("driven");
+  test::write_text(folder / "surface.json", scene.dump(2));
+  result = test::run_mtled({"run", (folder / "surface.json").string(), "-o", (folder / "surface").string()});
+  EXPECT_EQ(result.exit_code, 3) << result.output;
+  summary = test::read_json(folder / "surface" / "summary.json");
+  const std::string surface_detail = summary["diagnostic"]["detail"].get<std::string>();
+  expect_contains(surface_detail, "Stop the insertion before this depth (/needle/depth)");
+  EXPECT_EQ(surface_detail.find("shaft_surface"), std::string::npos) << surface_detail;
 }
 
 TEST(Cli, OverridesAndUnknownCommands) {

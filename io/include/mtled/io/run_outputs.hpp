@@ -81,10 +81,12 @@ class SnapshotWriter final : public OutputWriter {
 std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulation, const Scene& scene,
                                                              const OutputFolder& folder);
 
-// `file` (result.vtu, last_good_state.vtu): the mesh with the interpolated displacement of nodal parameters u and the
-// scene's cell data. Returns the interpolated displacement (3 per node).
+// `file` (result.vtu, last_good_state.vtu): the mesh with the interpolated displacement of nodal parameters u, the
+// scene's cell data (with_cell_data) and `extra_fields` (the folded tets of a stopped run). Returns the interpolated
+// displacement (3 per node).
 std::vector<double> write_state(const OutputFolder& folder, const std::string& file, const ModelView& model,
-                                std::span<const double> u, const Parameters& output, bool with_cell_data);
+                                std::span<const double> u, const Parameters& output, bool with_cell_data,
+                                const std::vector<CellField>& extra_fields = {});
 
 // summary.json, written at the start with status "running" and again at the end with the outcome, so that it always
 // says how the run ended. Each record_* adds what it names; write() replaces the file.
@@ -95,9 +97,9 @@ class RunSummary {
   void write() const;
   // What every outcome records: the times (s), the peak memory, the plugins loaded.
   void record_resources(const PluginCatalog& catalog, double setup_time, double solve_time, double wall_time);
-  // The model, the steps, the monitors' records and the integrator's report.
+  // The model, the steps, the monitors' records, the integrator's report and where the needle got to.
   void record_simulation(const Simulation& simulation, double solve_time);
-  // The final state: the largest of the interpolated displacements u (3 per node), the needle and the reactions.
+  // The final state: the largest of the interpolated displacements u (3 per node) and the reactions.
   void record_result(const Simulation& simulation, std::span<const double> u);
   // Status "unstable": what stopped the run and where, and the file holding the last good state.
   void record_instability(const Diagnostic& diagnostic, const std::string& last_good_state);

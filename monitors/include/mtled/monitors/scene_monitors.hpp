@@ -3,6 +3,9 @@
 // the stable-step re-estimate and the inversion check when their "every_steps" is not 0. Each check declares its own
 // parameters beside its code; the kernel's loop only calls StepMonitor, and a program that needs none of them (a
 // benchmark of the forces) leaves them out.
+#include <memory>
+#include <vector>
+
 #include "mtled/scene.hpp"
 #include "mtled/simulation.hpp"
 
@@ -11,6 +14,14 @@ namespace mtled {
 // The "monitors" section of a scene (validate_scene), declared by the checks.
 SceneSection monitors_section();
 
-void add_scene_monitors(Simulation& simulation, const Scene& scene);
+// The background tets the inversion check found turned inside out when it stopped a run, as a cell field for
+// last_good_state.vtu ("folded": 1 folded away from the needle, 0.5 cut in the needle's zone, 0 whole); empty
+// until such a check, or when the scene turns the check off.
+struct FoldedTets {
+  std::vector<double> per_tet;
+};
+
+// Adds the checks; returns what the inversion check marks when it stops a run.
+std::shared_ptr<const FoldedTets> add_scene_monitors(Simulation& simulation, const Scene& scene);
 
 }  // namespace mtled
