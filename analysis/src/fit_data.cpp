@@ -8,9 +8,9 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
-#include <sstream>
 #include <stdexcept>
 
+#include "csv_fields.hpp"
 #include "mtled/analysis/compare.hpp"
 #include "mtled/analysis/fit.hpp"
 #include "mtled/analysis/result_file.hpp"
@@ -37,16 +37,9 @@ Table read_table(const fs::path& file) {
   if (!in) throw std::runtime_error(fmt::format("the run wrote no {}", file.string()));
   Table table;
   std::string line;
-  auto split = [](const std::string& text) {
-    std::vector<std::string> fields;
-    std::stringstream s(text);
-    std::string field;
-    while (std::getline(s, field, ',')) fields.push_back(field);
-    return fields;
-  };
-  if (std::getline(in, line)) table.header = split(line);
+  if (std::getline(in, line)) table.header = csv_fields(line);
   while (std::getline(in, line))
-    if (!line.empty()) table.rows.push_back(split(line));
+    if (!line.empty()) table.rows.push_back(csv_fields(line));
   return table;
 }
 

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <fstream>
 #include <set>
-#include <sstream>
 
+#include "csv_fields.hpp"
 #include "mtled/analysis/fit.hpp"
 #include "mtled/analysis/scene_sections.hpp"
 #include "mtled/errors.hpp"
@@ -54,19 +54,6 @@ Columns columns_of(Quantity q) {
       return {{"x_m", "y_m", "z_m", "ux_m", "uy_m", "uz_m"}, "sigma_m"};
   }
   return {};
-}
-
-std::vector<std::string> split_csv_line(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream in(line);
-  std::string field;
-  while (std::getline(in, field, ',')) {
-    field.erase(0, field.find_first_not_of(" \t\r"));
-    field.erase(field.find_last_not_of(" \t\r") + 1);
-    fields.push_back(field);
-  }
-  if (!line.empty() && line.back() == ',') fields.emplace_back();
-  return fields;
 }
 
 class FitReader {
@@ -277,7 +264,7 @@ class FitReader {
     while (header.empty() && std::getline(in, line)) {
       ++number;
       if (line.find_first_not_of(" \t\r") != std::string::npos && line[line.find_first_not_of(" \t\r")] != '#')
-        header = split_csv_line(line);
+        header = csv_fields(line);
     }
     const Columns wanted = columns_of(e.quantity);
     std::vector<int> index;
@@ -302,7 +289,7 @@ class FitReader {
       ++number;
       if (line.find_first_not_of(" \t\r") == std::string::npos || line[line.find_first_not_of(" \t\r")] == '#')
         continue;
-      read_row(e, split_csv_line(line), index, sigma_column, label_column, sigma, fmt::format("{}:{}", name, number));
+      read_row(e, csv_fields(line), index, sigma_column, label_column, sigma, fmt::format("{}:{}", name, number));
     }
     if (e.data.empty() && !header.empty()) problems_.push_back({name, "no data rows under the header"});
   }

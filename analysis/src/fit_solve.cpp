@@ -27,6 +27,7 @@
 #include "mtled/markups.hpp"
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/simulation.hpp"
+#include "study_support.hpp"
 
 namespace fs = std::filesystem;
 
@@ -35,17 +36,6 @@ namespace mtled::fit {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-std::mutex history_mutex;  // the evaluations' record and the catalog the predictions use
-
-json read_json(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) return json();
-  try {
-    return json::parse(in);
-  } catch (const json::exception&) {
-    return json();
-  }
-}
 
 }  // namespace
 
@@ -65,18 +55,16 @@ Evaluator::Evaluator(const Plan& plan, const fs::path& output, const std::vector
                          : static_cast<int>(plan.parameters.size() * plan.experiments.size()) * searches;
   at_once_ = std::clamp(wanted, 1, threads);
   threads_ = threads;
+  slots_ = std::make_unique<std::counting_semaphore<>>(at_once_);
 }
 
 Evaluator::~Evaluator() = default;
 
 std::vector<Evaluation> Evaluator::evaluate(const std::vector<std::vector<double>>& points, int start,
                                             const std::string& purpose) {
-  static std::counting_semaphore<1024> slots(0);
-  static std::once_flag opened;
-  std::call_once(opened, [&] { slots.release(at_once_); });
   std::vector<Evaluation> out(points.size());
   {
-    const std::lock_guard lock(history_mutex);
+    const std::lock_guard lock(mutex_);
     for (std::size_t p = 0; p < points.size(); ++p) {
       out[p].index = static_cast<int>(history_.size());
       out[p].start = start;
@@ -98,9 +86,9 @@ std::vector<Evaluation> Evaluator::evaluate(const std::vector<std::vector<double
       const fs::path folder = e.folder / plan_.experiments[j % experiments].name;
       const std::vector<std::string> args = arguments(e, j % experiments, folder, threads);
       fs::create_directories(folder);
-      slots.acquire();
+      slots_->acquire();
       outcomes[j] = run_child(executable_, args, folder / "mtled.log", plan_.settings.timeout_s);
-      slots.release();
+      slots_->release();
     });
   for (auto& t : jobs) t.join();
   for (std::size_t p = 0; p < points.size(); ++p) {
@@ -141,14 +129,14 @@ void Evaluator::measure(Evaluation& e, std::span<const RunOutcome> outcomes) {
     const Experiment& experiment = plan_.experiments[x];
     e.wall_s = std::max(e.wall_s, o.elapsed_s);
     const fs::path folder = e.folder / experiment.name;
-    const json summary = read_json(folder / "summary.json");
+    const json summary = study::read_json_file(folder / "summary.json");
     const std::string status = o.timed_out           ? "timeout"
                                : summary.is_object() ? summary.value("status", "failed")
                                                      : "failed";
     std::vector<double> model;
     if (status == "ok" && o.exit_code == 0) {
       try {
-        const std::lock_guard lock(history_mutex);
+        const std::lock_guard lock(mutex_);
         model = predictions(experiment, folder, *catalog_);
       } catch (const std::exception& error) {
         e.status = "failed";
@@ -175,7 +163,7 @@ void Evaluator::measure(Evaluation& e, std::span<const RunOutcome> outcomes) {
 }
 
 Evaluation Evaluator::finish(Evaluation e) {
-  const std::lock_guard lock(history_mutex);
+  const std::lock_guard lock(mutex_);
   history_[static_cast<std::size_t>(e.index)] = e;
   return e;
 }
@@ -275,6 +263,8 @@ Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::Vector
   }
   double lambda = 1e-3;
   const Index n = z.size();
+  const bool sigma_known =
+      std::all_of(plan.experiments.begin(), plan.experiments.end(), [](const Experiment& e) { return e.sigma_given; });
   while (true) {
     if (!budget_left()) {
       out.termination = fmt::format("the budget of {} evaluations is spent", s.max_evaluations);
@@ -313,6 +303,14 @@ Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::Vector
         lambda *= 10.0;
         continue;
       }
+      // What the linear model promises: below what matters, no run is worth it. With the data's standard deviations
+      // known, a change of chi^2 under 0.01 moves no parameter by more than a tenth of its standard error.
+      const Eigen::VectorXd step = trial - z;
+      const double promised = -(2.0 * g.dot(step) + step.dot(A * step));
+      if (promised < std::max(s.tolerance * current.objective, sigma_known ? 0.01 : 0.0)) {
+        small_step = true;
+        break;
+      }
       const Evaluation t = evaluator.evaluate({values_of(plan, trial)}, start, "trial")[0];
       if (t.status == "ok" && t.objective < current.objective) {
         const double reduction = (current.objective - t.objective) / std::max(current.objective, 1e-300);
@@ -341,7 +339,7 @@ Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::Vector
       out.converged = true;
       out.termination = free.empty() ? "no parameter can move: each is at a bound the data push it past, or the data "
                                        "do not depend on it"
-                                     : "converged: the next step is below the tolerance";
+                                     : "converged: the next step promises less than the tolerance";
       break;
     }
     if (!accepted) {
@@ -364,7 +362,7 @@ Search bobyqa(const Plan& plan, Evaluator& evaluator, Eigen::VectorXd z0, int st
   opt.set_upper_bounds(std::vector<double>(n, 1.0));
   opt.set_maxeval(std::max(1, s.max_evaluations - static_cast<int>(evaluator.history().size())));
   opt.set_ftol_rel(s.tolerance);
-  opt.set_xtol_abs(s.tolerance * 1e-2);
+  opt.set_xtol_abs(s.tolerance);  // a step below the tolerance of the range: below what the runs resolve
   opt.set_initial_step(0.1);
   Search out;
   double penalty = HUGE_VAL;  // for a failed run: far above anything seen

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -199,6 +200,25 @@ HistogramCounts count_bins(const std::vector<double>& values, int bins) {
   return h;
 }
 
+// About four ticks on a linear x axis at y1 over [lo, hi] (sx maps a value to its x), labelled where they fit.
+void write_x_ticks(std::ostream& out, double lo, double hi, const std::function<double(double)>& sx, double y1) {
+  const auto x_ticks = linear_ticks(lo, hi, 4);
+  std::vector<double> positions;
+  std::vector<std::string> labels;
+  for (double t : x_ticks) {
+    positions.push_back(sx(t));
+    labels.push_back(number(t));
+  }
+  const auto keep = labels_that_fit(positions, labels, 10, true);
+  for (std::size_t i = 0; i < x_ticks.size(); ++i) {
+    out << fmt::format("<line x1=\"{0:.2f}\" y1=\"{1:.2f}\" x2=\"{0:.2f}\" y2=\"{2:.2f}\" stroke=\"black\"/>\n",
+                       positions[i], y1, y1 + 4);
+    if (keep[i])
+      out << fmt::format("<text x=\"{:.2f}\" y=\"{:.2f}\" text-anchor=\"middle\" font-size=\"10\">{}</text>\n",
+                         positions[i], y1 + 16, labels[i]);
+  }
+}
+
 // One panel in the box [x0, x1] x [y0, y1] (the plot area; its labels go around it).
 void write_histogram_panel(std::ostream& out, const HistogramPanel& panel, int bins, double x0, double x1, double y0,
                            double y1, double title_y, double title_width) {
@@ -230,21 +250,7 @@ void write_histogram_panel(std::ostream& out, const HistogramPanel& panel, int b
                      "stroke-dasharray=\"4 3\"/>\n",
                      sx(0.0), y0, y1);
   out << fmt::format("<path d=\"M {:.2f} {:.2f} V {:.2f} H {:.2f}\" fill=\"none\" stroke=\"black\"/>\n", x0, y0, y1, x1);
-  const auto x_ticks = linear_ticks(h.lo, h.hi, 4);
-  std::vector<double> positions;
-  std::vector<std::string> labels;
-  for (double t : x_ticks) {
-    positions.push_back(sx(t));
-    labels.push_back(fmt::format("{:.3g}", t));
-  }
-  const auto keep = labels_that_fit(positions, labels, 10, true);
-  for (std::size_t i = 0; i < x_ticks.size(); ++i) {
-    out << fmt::format("<line x1=\"{0:.2f}\" y1=\"{1:.2f}\" x2=\"{0:.2f}\" y2=\"{2:.2f}\" stroke=\"black\"/>\n",
-                       positions[i], y1, y1 + 4);
-    if (keep[i])
-      out << fmt::format("<text x=\"{:.2f}\" y=\"{:.2f}\" text-anchor=\"middle\" font-size=\"10\">{}</text>\n",
-                         positions[i], y1 + 16, labels[i]);
-  }
+  write_x_ticks(out, h.lo, h.hi, sx, y1);
   write_wrapped(out, (x0 + x1) / 2, y1 + 36, panel.x_label, 12, x1 - x0, Anchor::middle);
   out << fmt::format("<text transform=\"translate({:.2f} {:.2f}) rotate(-90)\" text-anchor=\"middle\">number of "
                      "nodes ({} in all)</text>\n",
@@ -491,28 +497,14 @@ void write_xy_panel(std::ostream& out, const XyPanel& panel, double x0, double x
     out << fmt::format("<text x=\"{:.2f}\" y=\"{:.2f}\" text-anchor=\"end\" font-size=\"10\">{}</text>\n", x0 - 5,
                        sy(t) + 3.5, number(t));
   }
-  const auto x_ticks = linear_ticks(xlo, xhi, 4);
-  std::vector<double> positions;
-  std::vector<std::string> labels;
-  for (double t : x_ticks) {
-    positions.push_back(sx(t));
-    labels.push_back(number(t));
-  }
-  const auto keep = labels_that_fit(positions, labels, 10, true);
-  for (std::size_t i = 0; i < x_ticks.size(); ++i) {
-    out << fmt::format("<line x1=\"{0:.2f}\" y1=\"{1:.2f}\" x2=\"{0:.2f}\" y2=\"{2:.2f}\" stroke=\"black\"/>\n",
-                       positions[i], y1, y1 + 4);
-    if (keep[i])
-      out << fmt::format("<text x=\"{:.2f}\" y=\"{:.2f}\" text-anchor=\"middle\" font-size=\"10\">{}</text>\n",
-                         positions[i], y1 + 16, labels[i]);
-  }
+  write_x_ticks(out, xlo, xhi, sx, y1);
   if (panel.identity_line)
     out << fmt::format("<line x1=\"{:.2f}\" y1=\"{:.2f}\" x2=\"{:.2f}\" y2=\"{:.2f}\" stroke=\"#c33\" "
                        "stroke-dasharray=\"4 3\"/>\n", sx(xlo), sy(xlo), sx(xhi), sy(xhi));
   if (!panel.x_line.empty()) {
-    out << "<polyline fill=\"none\" stroke=\"#c33\" stroke-width=\"1.5\" points=\"";
+    out << "<path fill=\"none\" stroke=\"#c33\" stroke-width=\"1.5\" d=\"";
     for (std::size_t i = 0; i < panel.x_line.size(); ++i)
-      out << fmt::format("{}{:.2f},{:.2f}", i ? " " : "", sx(panel.x_line[i]), sy(panel.y_line[i]));
+      out << fmt::format("{}{:.2f} {:.2f}", i ? " L " : "M ", sx(panel.x_line[i]), sy(panel.y_line[i]));
     out << "\"/>\n";
   }
   for (std::size_t i = 0; i < panel.x_points.size(); ++i)

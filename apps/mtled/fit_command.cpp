@@ -12,6 +12,11 @@ namespace mtled::app {
 
 int fit_command(const FitOptions& options) {
   fit::Plan plan = fit::read(options.fit, options.overrides, options.plugin_paths);
+  if (options.check) {  // everything read and checked; a template for --synthesize passes
+    log().info("{}: {} parameters, {} experiments: ready to run", options.fit.string(), plan.parameters.size(),
+               plan.experiments.size());
+    return 0;
+  }
   if (options.threads > 0) plan.settings.threads = options.threads;
   const OutputFolder out(options.output);
   fit::Result result;

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The documentation stays true to the code: every relative link in README.md and docs/*.md points at a file
 that exists, and every `mtled run`/`mtled validate` example (with its --set overrides) names a scene the
-built mtled accepts, and every `mtled study` example names a study file that exists.
+built mtled accepts, and every `mtled study` or `mtled fit` example names a study or fit file that exists.
 
 Usage: check_docs.py SOURCE_DIR MTLED_EXECUTABLE
 """
@@ -29,7 +29,7 @@ for page in pages:
                 problems.append(f"{where}: link to {target}, which does not exist")
         # Commands shown as examples: an indented line or a table cell starting with build/bin/mtled; a quote
         # ends one (a command quoted inside another, as farm-bench's --vs takes it).
-        match = re.search(r"build/bin/mtled (run|validate|study) ([^|`#\"']*)", line)
+        match = re.search(r"build/bin/mtled (run|validate|study|fit) ([^|`#\"']*)", line)
         if not match:
             continue
         words = shlex.split(match.group(2))
@@ -40,6 +40,10 @@ for page in pages:
         if match.group(1) == "study":
             if not target.exists():
                 problems.append(f"{where}: the study {words[0]} does not exist")
+            continue
+        if match.group(1) == "fit":  # shipped fit files exist (fit_test checks that they read); a user's own may not
+            if words[0].startswith("share/") and not target.exists():
+                problems.append(f"{where}: the fit file {words[0]} does not exist")
             continue
         if not target.exists():
             if words[0].startswith("share/"):

@@ -1,4 +1,4 @@
-// Writes the figures of `mtled study` and `mtled compare` for ordinary and for awkward input (long titles and
+// Writes the figures of `mtled study`, `mtled compare` and `mtled fit` for ordinary and for awkward input (long titles and
 // paths, crowded points, labels near the legend, zero errors, tiny ranges) into a folder, through the same
 // functions the commands use; tests/interop/figures_render.py draws them with a real SVG renderer and checks
 // their layout.
@@ -80,6 +80,33 @@ int main(int argc, char** argv) {
                      "64000 nodes of B, A (4000 nodes) interpolated onto them with MLS; NRMSE = RMSE(u_A - u_B) / "
                      "(max u_B - min u_B), RMSE = sqrt(mean of squares)",
                      25);
+  });
+  write(folder / "fit_typical.svg", [&](std::ostream& o) {
+    XyPanel force{"compression: R^2 0.9998", "top displacement (mm)", "force (N): measured o, fitted -", {}, {}, {}, {}};
+    XyPanel markers{"xray_8mm: R^2 0.977", "measured displacement component (mm)", "fitted (mm)", {}, {}, {}, {}};
+    for (int i = 1; i <= 8; ++i) {
+      force.x_points.push_back(-0.5 * i);
+      force.y_points.push_back(-0.012 * i * i * (1.0 + 0.01 * std::sin(i)));
+      force.x_line.push_back(-0.5 * i);
+      force.y_line.push_back(-0.012 * i * i);
+    }
+    for (int i = 0; i < 120; ++i) {
+      markers.x_points.push_back(-2.5 * std::sin(0.3 * i) * std::exp(-0.01 * i));
+      markers.y_points.push_back(markers.x_points.back() + 0.05 * std::cos(1.7 * i));
+    }
+    markers.identity_line = true;
+    write_xy_panels(o, {force, markers}, "Measured against fitted",
+                    "C_D = 0.3983 +- 0.0049, puncture_strain = 1.4e-05 +- inf (1 sigma)");
+  });
+  write(folder / "fit_awkward.svg", [&](std::ostream& o) {
+    // One datum, a flat curve, a title longer than the panel, numbers of every size.
+    XyPanel single{"an experiment whose name is much longer than its panel is wide: semi-confined compression at "
+                   "the rims, third batch of gel, R^2 nan",
+                   "needle depth (mm)", "force (N): measured o, fitted -", {15.0}, {1.234e-7}, {15.0}, {1.234e-7}};
+    XyPanel flat{"flat: R^2 0", "needle depth (mm)", "force (N)", {1, 2, 3}, {5, 5, 5}, {1, 2, 3}, {5, 5, 5}};
+    write_xy_panels(o, {single, flat}, "Measured against fitted: a fit whose description is much longer than the "
+                    "figure is wide, as users write them, with every parameter's name spelled out",
+                    "mu = 712 +- 7.7, alpha = -1.331 +- 0.21, D = 5.57738e-05 +- 1.2e-03 (1 sigma)");
   });
   return 0;
 }

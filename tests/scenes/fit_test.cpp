@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 
 #include "test_support.hpp"
 #include "xml_check.hpp"
@@ -254,6 +255,51 @@ TEST(Fit, BadInputIsReportedBeforeAnyRun) {
   expect_contains(third.output, "late.csv:3");
   expect_contains(third.output, "outside the run's range");
   EXPECT_FALSE(fs::exists(folder / "out3" / "runs"));
+
+  // Markers outside the body are named by their line.
+  write_text(folder / "markers.csv",
+             "label,x_m,y_m,z_m,ux_m,uy_m,uz_m\ninside,0.005,0.005,0.005,0,0,0\n"
+             "outside,0.005,0.005,0.012,0,0,0\n");
+  fit["experiments"][0] = {
+      {"name", "beads"}, {"scene", "cube.json"}, {"data", "markers.csv"}, {"compare", "markers"}, {"sigma", 1e-4}};
+  write_text(folder / "fit4.json", fit.dump(2));
+  const auto fourth = run_mtled({"fit", (folder / "fit4.json").string(), "-o", (folder / "out4").string()});
+  EXPECT_EQ(fourth.exit_code, 2) << fourth.output;
+  expect_contains(fourth.output, "markers.csv:3");
+  expect_contains(fourth.output, "marker \"outside\"");
+  EXPECT_EQ(fourth.output.find("\"inside\""), std::string::npos) << fourth.output;
+}
+
+// Levenberg-Marquardt from two start points searched at the same time, and BOBYQA from one: the same optimum.
+TEST(Fit, BobyqaFindsTheOptimumLevenbergMarquardtFindsFromTwoStarts) {
+  const fs::path folder = scratch_dir("fit-bobyqa");
+  write_text(folder / "cube.json", compression_cube().dump(2));
+  write_compression_template(folder / "compression.csv");
+  json fit = compression_fit("compression.csv");
+  fit["method"]["starts"] = {{1000.0, -0.8}};
+  write_text(folder / "fit.json", fit.dump(2));
+  const json lm = synthesize_then_fit(folder / "lm", folder / "fit.json", "compression.csv", "/experiments/0/data", 1,
+                                      {"/parameters/0/start=433.2", "/parameters/1/start=-1.82"});
+  fit["method"] = {{"type", "bobyqa"}, {"max_evaluations", 60}, {"tolerance", 1e-3}};
+  write_text(folder / "fit.json", fit.dump(2));
+  const json bobyqa =
+      synthesize_then_fit(folder / "bobyqa", folder / "fit.json", "compression.csv", "/experiments/0/data", 1,
+                          {"/parameters/0/start=433.2", "/parameters/1/start=-1.82"});
+  ASSERT_TRUE(lm.is_object() && bobyqa.is_object());
+  EXPECT_EQ(bobyqa["method"], "bobyqa");
+  // The same data (seed 1): BOBYQA, stopped at a relative change of 1e-3, ends inside the 1-sigma region of
+  // Levenberg-Marquardt's optimum (chi^2 within 1 of it, each parameter within one standard error), which is as
+  // close as the data tell two points apart.
+  for (const char* name : {"mu", "alpha"})
+    EXPECT_LT(std::abs(parameter(bobyqa, name)["value"].get<double>() - parameter(lm, name)["value"].get<double>()),
+              parameter(lm, name)["standard_error"].get<double>())
+        << name << "\n"
+        << bobyqa.dump(2);
+  EXPECT_LT(bobyqa["objective"].get<double>(), lm["objective"].get<double>() + 1.0);
+  EXPECT_GT(bobyqa["objective"].get<double>(), lm["objective"].get<double>() - 0.05);  // LM's is the minimum
+  std::set<std::string> starts;
+  for (const auto& row : read_csv(folder / "lm" / "fit" / "fit.csv")) starts.insert(row[1]);
+  EXPECT_TRUE(starts.count("0") && starts.count("1")) << "both start points searched";
 }
 
 // A forward run that goes unstable is recorded with its status and has no objective; the others are measured.
@@ -281,6 +327,18 @@ TEST(Fit, AnUnstableForwardRunIsABadPointNotTheEnd) {
   EXPECT_TRUE(std::isnan(evaluations[1].objective));
   expect_contains(evaluations[1].message, "compression");
   EXPECT_EQ(evaluator.history().size(), 2u);
+}
+
+// The shipped fit files (docs/calibration.md's worked examples) read and check, scenes and data included.
+TEST(Fit, TheShippedFitFilesAreReadyToRun) {
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(source_dir() / "share/fits")) {
+    if (entry.path().extension() != ".json") continue;
+    ++files;
+    const auto result = run_mtled({"fit", entry.path().string(), "-o", scratch_dir("fit-check").string(), "--check"});
+    EXPECT_EQ(result.exit_code, 0) << entry.path() << "\n" << result.output;
+  }
+  EXPECT_GE(files, 5);
 }
 
 }  // namespace

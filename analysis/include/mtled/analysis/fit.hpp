@@ -11,8 +11,10 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <ostream>
+#include <semaphore>
 #include <span>
 #include <string>
 #include <vector>
@@ -159,7 +161,9 @@ class Evaluator {
   std::string log_level_;
   std::unique_ptr<PluginCatalog> catalog_;
   std::vector<Evaluation> history_;
-  int at_once_ = 1, threads_ = 1;  // runs at once at most, and the threads they share
+  int at_once_ = 1, threads_ = 1;                     // runs at once at most, and the threads they share
+  std::unique_ptr<std::counting_semaphore<>> slots_;  // at_once_ of them: a run takes one while it goes
+  std::mutex mutex_;  // history_ and the catalog the predictions use, between the searches' threads
 };
 
 // Writes each experiment's mesh once (when it is generated and no parameter changes it) so that every forward run
