@@ -257,18 +257,22 @@ void write_histogram_panel(std::ostream& out, const HistogramPanel& panel, int b
                      x0 - 44, (y0 + y1) / 2, h.total);
 }
 
-}  // namespace
+// Where a figure of panels side by side puts one panel: its plot area and its title's first line and width.
+struct PanelFrame {
+  double x0, x1, top, bottom, title_y, title_width;
+};
 
-void write_histograms(std::ostream& out, const std::vector<HistogramPanel>& panels, const std::string& heading,
-                      const std::string& subheading, int bins) {
-  bins = std::max(bins, 1);
-  const double panel_w = 380, panel_h = 330;
-  const double left = 62, right = 28, lower = 56;  // margins inside a panel
-  const double width = panel_w * static_cast<double>(std::max<std::size_t>(panels.size(), 1));
-  // Heading and subheading wrapped to the figure's width; panel titles to their panel's.
+// The figure both panel kinds share: panels 380 wide side by side under a heading and a smaller subheading (wrapped
+// to the figure's width), each title wrapped to its panel's; `draw` fills panel p's frame. `left` and `right` are the
+// margins inside a panel for its axis labels.
+void write_panel_figure(std::ostream& out, const std::vector<std::string>& titles, const std::string& heading,
+                        const std::string& subheading, double left, double right,
+                        const std::function<void(std::size_t, const PanelFrame&)>& draw) {
+  const double panel_w = 380, panel_h = 330, lower = 56;
+  const double width = panel_w * static_cast<double>(std::max<std::size_t>(titles.size(), 1));
   const double text_width_max = width - 24, title_width = panel_w - 16;
   std::size_t title_lines = 1;
-  for (const auto& panel : panels) title_lines = std::max(title_lines, line_count(panel.title, 13, title_width));
+  for (const auto& title : titles) title_lines = std::max(title_lines, line_count(title, 13, title_width));
   const double heading_end =
       24 + 20.0 * static_cast<double>(line_count(heading, 16, text_width_max) - 1) +
       (subheading.empty() ? 0.0 : 16.0 * static_cast<double>(line_count(subheading, 11, text_width_max)));
@@ -277,15 +281,27 @@ void write_histograms(std::ostream& out, const std::vector<HistogramPanel>& pane
   const double height = top + panel_h - 30;
   write_svg_start(out, width, height);
   double y = write_wrapped(out, width / 2, 24, heading, 16, text_width_max, Anchor::middle);
-  if (!subheading.empty()) write_wrapped(out, width / 2, y - 4, subheading, 11, text_width_max, Anchor::middle,
-                                         "fill=\"#444\"");
-  for (std::size_t p = 0; p < panels.size(); ++p) {
+  if (!subheading.empty())
+    write_wrapped(out, width / 2, y - 4, subheading, 11, text_width_max, Anchor::middle, "fill=\"#444\"");
+  for (std::size_t p = 0; p < titles.size(); ++p) {
     const double x0 = static_cast<double>(p) * panel_w + left, x1 = (static_cast<double>(p) + 1) * panel_w - right;
     out << fmt::format("<g id=\"panel{}\">\n", p);
-    write_histogram_panel(out, panels[p], bins, x0, x1, top, height - lower, title_y, title_width);
+    draw(p, PanelFrame{x0, x1, top, height - lower, title_y, title_width});
     out << "</g>\n";
   }
   out << "</svg>\n";
+}
+
+}  // namespace
+
+void write_histograms(std::ostream& out, const std::vector<HistogramPanel>& panels, const std::string& heading,
+                      const std::string& subheading, int bins) {
+  bins = std::max(bins, 1);
+  std::vector<std::string> titles;
+  for (const auto& panel : panels) titles.push_back(panel.title);
+  write_panel_figure(out, titles, heading, subheading, 62, 28, [&](std::size_t p, const PanelFrame& f) {
+    write_histogram_panel(out, panels[p], bins, f.x0, f.x1, f.top, f.bottom, f.title_y, f.title_width);
+  });
 }
 
 namespace {
@@ -520,29 +536,11 @@ void write_xy_panel(std::ostream& out, const XyPanel& panel, double x0, double x
 
 void write_xy_panels(std::ostream& out, const std::vector<XyPanel>& panels, const std::string& heading,
                      const std::string& subheading) {
-  const double panel_w = 380, panel_h = 330;
-  const double left = 66, right = 24, lower = 56;
-  const double width = panel_w * static_cast<double>(std::max<std::size_t>(panels.size(), 1));
-  const double text_width_max = width - 24, title_width = panel_w - 16;
-  std::size_t title_lines = 1;
-  for (const auto& panel : panels) title_lines = std::max(title_lines, line_count(panel.title, 13, title_width));
-  const double heading_end =
-      24 + 20.0 * static_cast<double>(line_count(heading, 16, text_width_max) - 1) +
-      (subheading.empty() ? 0.0 : 16.0 * static_cast<double>(line_count(subheading, 11, text_width_max)));
-  const double title_y = heading_end + 30;
-  const double top = title_y + 16.25 * static_cast<double>(title_lines);
-  const double height = top + panel_h - 30;
-  write_svg_start(out, width, height);
-  double y = write_wrapped(out, width / 2, 24, heading, 16, text_width_max, Anchor::middle);
-  if (!subheading.empty())
-    write_wrapped(out, width / 2, y - 4, subheading, 11, text_width_max, Anchor::middle, "fill=\"#444\"");
-  for (std::size_t p = 0; p < panels.size(); ++p) {
-    const double x0 = static_cast<double>(p) * panel_w + left, x1 = (static_cast<double>(p) + 1) * panel_w - right;
-    out << fmt::format("<g id=\"panel{}\">\n", p);
-    write_xy_panel(out, panels[p], x0, x1, top, height - lower, title_y, title_width);
-    out << "</g>\n";
-  }
-  out << "</svg>\n";
+  std::vector<std::string> titles;
+  for (const auto& panel : panels) titles.push_back(panel.title);
+  write_panel_figure(out, titles, heading, subheading, 66, 24, [&](std::size_t p, const PanelFrame& f) {
+    write_xy_panel(out, panels[p], f.x0, f.x1, f.top, f.bottom, f.title_y, f.title_width);
+  });
 }
 
 }  // namespace mtled::svg
