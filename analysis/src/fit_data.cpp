@@ -43,10 +43,15 @@ Table read_table(const fs::path& file) {
   return table;
 }
 
-// Linear interpolation in a table of (x, y) sorted by x, with (0, 0) in front when it starts past 0.
-double interpolate(std::vector<std::pair<double, double>> curve, double x) {
+// A run's curve sorted by x, with (0, 0) in front when it starts past 0 (no depth, no displacement: no force).
+std::vector<std::pair<double, double>> from_origin(std::vector<std::pair<double, double>> curve) {
   std::sort(curve.begin(), curve.end());
   if (curve.empty() || curve.front().first > 0.0) curve.insert(curve.begin(), {0.0, 0.0});
+  return curve;
+}
+
+// Linear interpolation in a curve from from_origin, held at its ends.
+double interpolate(const std::vector<std::pair<double, double>>& curve, double x) {
   if (x <= curve.front().first) return curve.front().second;
   if (x >= curve.back().first) return curve.back().second;
   const auto hi = std::upper_bound(curve.begin(), curve.end(), std::make_pair(x, -HUGE_VAL));
@@ -64,6 +69,7 @@ std::vector<double> needle_forces(const Experiment& e, const fs::path& folder) {
     curve.emplace_back(std::stod(r.at(static_cast<std::size_t>(depth))),
                        std::stod(r.at(static_cast<std::size_t>(force))));
   std::vector<double> out;
+  curve = from_origin(std::move(curve));
   for (const auto& d : e.data) out.push_back(interpolate(curve, d.abscissa));
   return out;
 }
@@ -87,6 +93,7 @@ std::vector<double> reaction_forces(const Experiment& e, const fs::path& folder)
   const double sign = e.displacement_full < 0.0 ? -1.0 : 1.0;
   for (auto& [x, y] : curve) x *= sign;
   std::vector<double> out;
+  curve = from_origin(std::move(curve));
   for (const auto& d : e.data) out.push_back(interpolate(curve, sign * d.abscissa));
   return out;
 }

@@ -19,8 +19,9 @@ int fit_command(const FitOptions& options) {
   }
   if (options.threads > 0) plan.settings.threads = options.threads;
   const OutputFolder out(options.output);
-  fit::Result result;
-  if (options.reuse_mesh) result.setup_seconds = fit::write_meshes_once(plan, out.path(), options.plugin_paths);
+  if (!options.synthesize) fit::check_measured(plan);  // a template for --synthesize may lack measured values
+  const double mesh_seconds =
+      options.reuse_mesh ? fit::write_meshes_once(plan, out.path(), options.plugin_paths) : 0.0;
   fit::Evaluator evaluator(plan, out.path(), options.plugin_paths, options.log_level);
   log().info(
       "fit: {} parameters, {} experiments, {} data; up to {} runs at once sharing {} threads", plan.parameters.size(),
@@ -35,9 +36,7 @@ int fit_command(const FitOptions& options) {
     fit::synthesize(plan, evaluator, *options.synthesize, out.path() / "data");
     return 0;
   }
-  fit::check_measured(plan);
-  const double mesh_seconds = result.setup_seconds;
-  result = fit::solve(plan, evaluator);
+  fit::Result result = fit::solve(plan, evaluator);
   result.setup_seconds = mesh_seconds;
   const fit::Statistics stats = fit::statistics(plan, result);
   fit::write_report(plan, result, stats, out.path());

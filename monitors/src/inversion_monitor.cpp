@@ -118,15 +118,12 @@ void InversionMonitor::check(const StepRecord& step) {
     first_position_ = mesh.points[node];
   }
   if (stop_) stop(step, worst, smallest, node, moved(node) - mesh.points[node]);
-  if (!stop_) {
-    if (first)
-      log().warn(
-          "step {}: {} background tets turned inside out away from the needle (the worst {:.3g} times its "
-          "volume, around node {} at {} m): material folded between integration points; /monitors/inversion "
-          "= \"stop\" ends such runs",
-          step.step, inverted, smallest, node, point_text(mesh.points[node]));
-    return;
-  }
+  if (first)
+    log().warn(
+        "step {}: {} background tets turned inside out away from the needle (the worst {:.3g} times its "
+        "volume, around node {} at {} m): material folded between integration points; /monitors/inversion "
+        "= \"stop\" ends such runs",
+        step.step, inverted, smallest, node, point_text(mesh.points[node]));
 }
 
 std::string InversionMonitor::lever(const NeedleStatus* needle, double radial, bool pushed_by_boundary) const {
