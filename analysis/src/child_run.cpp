@@ -8,8 +8,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <string_view>
@@ -78,6 +80,20 @@ RunOutcome run_child(const fs::path& executable, const std::vector<std::string>&
   if (WIFEXITED(status)) outcome.exit_code = WEXITSTATUS(status);
   if (WIFSIGNALED(status)) outcome.signal = WTERMSIG(status);
   return outcome;
+}
+
+std::filesystem::path find_program(const std::string& name) {
+  const auto executable = [](const fs::path& p) { return ::access(p.c_str(), X_OK) == 0 && !fs::is_directory(p); };
+  if (name.find('/') != std::string::npos) return executable(name) ? fs::absolute(name) : fs::path();
+  const char* path = std::getenv("PATH");
+  std::string directories = path != nullptr ? path : "/usr/local/bin:/usr/bin:/bin";
+  for (std::size_t begin = 0; begin <= directories.size();) {
+    const std::size_t end = std::min(directories.find(':', begin), directories.size());
+    const fs::path candidate = fs::path(end > begin ? directories.substr(begin, end - begin) : ".") / name;
+    if (executable(candidate)) return fs::absolute(candidate);
+    begin = end + 1;
+  }
+  return {};
 }
 
 }  // namespace mtled

@@ -69,7 +69,7 @@ class FitReader {
     const json& root = plan.document.root;
     if (!root.is_object()) throw InputError(file_.string(), "a fit file is a JSON object (docs/calibration.md)");
     check_keys(root, "",
-               {"description", "parameters", "experiments", "method", "threads", "concurrent_runs", "timeout_s"});
+               {"description", "parameters", "experiments", "method", "threads", "concurrent_runs", "timeout_s", "launcher"});
     plan.description = root.value("description", "");
     read_experiments(root, plan.experiments);
     read_parameters(root, plan.experiments, plan.parameters);
@@ -410,6 +410,25 @@ class FitReader {
     if (valid(pointer, where + "/pointer")) std::fill(p.pointers.begin(), p.pointers.end(), pointer.get<std::string>());
   }
 
+  // "launcher": a non-empty list of strings whose first names a program on PATH (or a path to one).
+  void read_launcher(const json& root, std::vector<std::string>& launcher) {
+    if (!root.contains("launcher")) return;
+    const json& l = root["launcher"];
+    const bool strings =
+        l.is_array() && !l.empty() && std::all_of(l.begin(), l.end(), [](const json& v) { return v.is_string(); });
+    if (!strings) {
+      problem("/launcher", "a list of strings: the command put before each forward run, e.g. [\"srun\", \"-N\", \"1\", "
+                           "\"-n\", \"1\", \"--exclusive\"] or [\"mpirun\", \"-np\", \"4\"]");
+      return;
+    }
+    launcher = l.get<std::vector<std::string>>();
+    const fs::path program = find_program(launcher.front());
+    if (program.empty())
+      problem("/launcher/0", fmt::format("\"{}\" is neither an executable file nor a program on PATH", launcher.front()));
+    else
+      launcher.front() = program.string();
+  }
+
   void read_settings(const json& root, std::size_t parameter_count, Settings& s) {
     const auto count = [&](const json& object, const std::string& key, const std::string& where, int minimum,
                            int& out) {
@@ -422,6 +441,7 @@ class FitReader {
     count(root, "threads", "", 0, s.threads);
     count(root, "concurrent_runs", "", 0, s.concurrent_runs);
     if (auto t = number(root, "timeout_s", "", false)) s.timeout_s = *t;
+    read_launcher(root, s.launcher);
     if (!root.contains("method")) return;
     const json& m = root["method"];
     if (!m.is_object()) {

@@ -53,7 +53,8 @@ Evaluator::Evaluator(const Plan& plan, const fs::path& output, const std::vector
   const int wanted = plan.settings.concurrent_runs > 0
                          ? plan.settings.concurrent_runs
                          : static_cast<int>(plan.parameters.size() * plan.experiments.size()) * searches;
-  at_once_ = std::clamp(wanted, 1, threads);
+  // Launched runs go elsewhere (other machines, their own ranks): the fit's own cores do not bound them.
+  at_once_ = plan.settings.launcher.empty() ? std::clamp(wanted, 1, threads) : std::max(wanted, 1);
   threads_ = threads;
   slots_ = std::make_unique<std::counting_semaphore<>>(at_once_);
 }
@@ -78,16 +79,24 @@ std::vector<Evaluation> Evaluator::evaluate(const std::vector<std::vector<double
   const std::size_t experiments = plan_.experiments.size();
   std::vector<RunOutcome> outcomes(points.size() * experiments);
   std::vector<std::thread> jobs;
-  // A batch smaller than the runs allowed at once gives each run more threads (a trial point gets them all).
-  const int threads = std::max(1, threads_ / std::min(at_once_, static_cast<int>(outcomes.size())));
+  // A batch smaller than the runs allowed at once gives each run more threads (a trial point gets them all); a
+  // launched run has its own machine's threads.
+  const std::vector<std::string>& launcher = plan_.settings.launcher;
+  const int threads = launcher.empty() ? std::max(1, threads_ / std::min(at_once_, static_cast<int>(outcomes.size())))
+                                       : threads_;
   for (std::size_t j = 0; j < outcomes.size(); ++j)
     jobs.emplace_back([&, j] {
       const Evaluation& e = out[j / experiments];
       const fs::path folder = e.folder / plan_.experiments[j % experiments].name;
-      const std::vector<std::string> args = arguments(e, j % experiments, folder, threads);
+      std::vector<std::string> args = arguments(e, j % experiments, folder, threads);
       fs::create_directories(folder);
+      if (!launcher.empty()) {
+        args.insert(args.begin(), executable_.string());
+        args.insert(args.begin(), launcher.begin() + 1, launcher.end());
+      }
       slots_->acquire();
-      outcomes[j] = run_child(executable_, args, folder / "mtled.log", plan_.settings.timeout_s);
+      outcomes[j] = run_child(launcher.empty() ? executable_ : fs::path(launcher.front()), args, folder / "mtled.log",
+                              plan_.settings.timeout_s);
       slots_->release();
     });
   for (auto& t : jobs) t.join();

@@ -1,6 +1,8 @@
 // mtled fit: scene parameters identified from measurements (the fit library, analysis/include/mtled/analysis/fit.hpp;
 // the file format in docs/calibration.md). Everything is checked before the first forward run; with --synthesize the
 // command writes data made by the model at the start values, with seeded noise, instead of fitting.
+#include <fmt/ranges.h>
+
 #include <iostream>
 
 #include "commands.hpp"
@@ -23,15 +25,14 @@ int fit_command(const FitOptions& options) {
   const double mesh_seconds =
       options.reuse_mesh ? fit::write_meshes_once(plan, out.path(), options.plugin_paths) : 0.0;
   fit::Evaluator evaluator(plan, out.path(), options.plugin_paths, options.log_level);
-  log().info(
-      "fit: {} parameters, {} experiments, {} data; up to {} runs at once sharing {} threads", plan.parameters.size(),
-      plan.experiments.size(),
-      [&] {
-        std::size_t n = 0;
-        for (const auto& e : plan.experiments) n += e.data.size();
-        return n;
-      }(),
-      evaluator.runs_at_once(), evaluator.threads());
+  std::size_t data = 0;
+  for (const auto& e : plan.experiments) data += e.data.size();
+  const std::vector<std::string>& launcher = plan.settings.launcher;
+  log().info("fit: {} parameters, {} experiments, {} data; up to {} runs at once {}", plan.parameters.size(),
+             plan.experiments.size(), data, evaluator.runs_at_once(),
+             launcher.empty() ? fmt::format("sharing {} threads", evaluator.threads())
+                              : fmt::format("through `{}`, {} threads each", fmt::join(launcher, " "),
+                                            evaluator.threads()));
   if (options.synthesize) {
     fit::synthesize(plan, evaluator, *options.synthesize, out.path() / "data");
     return 0;

@@ -11,6 +11,7 @@
 #include <map>
 #include <set>
 
+#include "mtled/errors.hpp"
 #include "test_support.hpp"
 #include "xml_check.hpp"
 
@@ -327,6 +328,56 @@ TEST(Fit, AnUnstableForwardRunIsABadPointNotTheEnd) {
   EXPECT_TRUE(std::isnan(evaluations[1].objective));
   expect_contains(evaluations[1].message, "compression");
   EXPECT_EQ(evaluator.history().size(), 2u);
+}
+
+// A launcher (srun in a batch job, mpirun for ranks) goes before each forward run, and what the fit measures is the
+// same: each prediction within 1e-9 of the plain run's (the threads, or the ranks, only reorder sums). A launcher
+// that names no program is refused when the fit file is read.
+TEST(Fit, ALauncherGoesBeforeEachForwardRunAndChangesNoPrediction) {
+  const fs::path folder = scratch_dir("fit-launcher");
+  write_text(folder / "cube.json", compression_cube().dump(2));
+  write_compression_template(folder / "compression.csv");
+  json fit = compression_fit("compression.csv");
+  fit["threads"] = 1;
+  const std::vector<std::vector<double>> points = {{722, -1.3}, {900, -1.0}};
+  const auto evaluate = [&](const std::string& name, const json& launcher) {
+    json file = fit;
+    if (!launcher.is_null()) file["launcher"] = launcher;
+    write_text(folder / (name + ".json"), file.dump(2));
+    const fit::Plan plan = fit::read(folder / (name + ".json"), {}, {plugin_dir()});
+    fit::Evaluator evaluator(plan, folder / name, {plugin_dir()}, "warn", MTLED_EXECUTABLE);
+    return evaluator.evaluate(points, 0, "start");
+  };
+  const auto expect_same = [&](const std::vector<fit::Evaluation>& a, const std::vector<fit::Evaluation>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t p = 0; p < a.size(); ++p) {
+      ASSERT_EQ(b[p].status, "ok") << b[p].message;
+      ASSERT_EQ(a[p].model[0].size(), b[p].model[0].size());
+      for (std::size_t k = 0; k < a[p].model[0].size(); ++k)
+        EXPECT_NEAR(b[p].model[0][k], a[p].model[0][k], 1e-9 * std::abs(a[p].model[0][k])) << "point " << p;
+    }
+  };
+  const auto plain = evaluate("plain", nullptr);
+  const fs::path launched_log = folder / "launched.txt";
+  const auto wrapped = evaluate("wrapped", {"sh", "-c", "echo launched >> \"$0\"; exec \"$@\"", launched_log.string()});
+  expect_same(plain, wrapped);
+  EXPECT_EQ(read_csv(launched_log).size(), points.size());  // one line per forward run
+
+  if (std::system("command -v mpirun > /dev/null 2>&1") == 0 && fs::exists(plugin_dir() / "mtled-backend-mpi.so")) {
+    const auto ranks = evaluate("ranks", {"mpirun", "--allow-run-as-root", "--oversubscribe", "-np", "2"});
+    expect_same(plain, ranks);
+    EXPECT_EQ(read_json(folder / "ranks" / "runs" / "0000" / "compression" / "summary.json")["backend"]["ranks"], 2);
+  }
+
+  fit["launcher"] = {"no-such-launcher-program", "-n", "1"};
+  write_text(folder / "bad.json", fit.dump(2));
+  try {
+    fit::read(folder / "bad.json", {}, {plugin_dir()});
+    FAIL() << "a launcher naming no program was accepted";
+  } catch (const InputError& e) {
+    expect_contains(e.what(), "/launcher/0");
+    expect_contains(e.what(), "no-such-launcher-program");
+  }
 }
 
 // The shipped fit files (docs/calibration.md's worked examples) read and check, scenes and data included.

@@ -23,4 +23,8 @@ struct RunOutcome {
 RunOutcome run_child(const std::filesystem::path& executable, const std::vector<std::string>& arguments,
                      const std::filesystem::path& log_file, double timeout_s);
 
+// A program as a shell finds it: a name with a slash is a path, any other is looked up in PATH's directories.
+// Empty when no executable file is found.
+std::filesystem::path find_program(const std::string& name);
+
 }  // namespace mtled

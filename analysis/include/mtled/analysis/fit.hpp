@@ -79,9 +79,12 @@ struct Settings {
   double tolerance = 1e-4;  // relative change of the objective, or of the scaled parameters, that ends the search
   double fd_step = 0.01;    // forward-difference step on the unit interval
   std::vector<std::vector<double>> extra_starts;  // further start points (restarts)
-  int threads = 0;                                // in all, split between the runs that go at once (0: every core)
-  int concurrent_runs = 0;                        // forward runs at once (0: one per parameter, at most the threads)
-  double timeout_s = 0.0;  // a forward run still going after this long is stopped and counted as failed
+  int threads = 0;  // in all, split between the runs that go at once (0: every core); with a launcher, each run's
+  int concurrent_runs = 0;  // forward runs at once (0: one per parameter and start; at most the threads, unless launched)
+  double timeout_s = 0.0;   // a forward run still going after this long is stopped and counted as failed
+  // A command put before each forward run (srun ..., mpirun -np 4): runs on other machines of a batch job, or each
+  // on several ranks. Its program is found on PATH when the fit file is read.
+  std::vector<std::string> launcher;
 };
 
 struct Plan {
