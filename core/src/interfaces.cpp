@@ -28,6 +28,10 @@ BoundaryCondition::~BoundaryCondition() = default;
 NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
 VolumetricTreatment::~VolumetricTreatment() = default;
+Index VolumetricTreatment::stress_deformation_gradients(const Model& model, std::span<const double> u,
+                                                        std::span<Mat3> F) {
+  return model.deformation_gradients(u, F);
+}
 Index VolumetricTreatment::internal_forces(const Model&, std::span<const double>, std::span<double>,
                                            std::span<const PointRange>) {
   throw std::logic_error("this volumetric treatment sums only over every integration point");

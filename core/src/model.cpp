@@ -693,6 +693,11 @@ Index Model::internal_forces(std::span<const double> u, std::span<double> f, std
   return bad == std::numeric_limits<Index>::max() ? -1 : bad;
 }
 
+Index Model::stress_deformation_gradients(std::span<const double> u, std::span<Mat3> F) const {
+  if (volumetric_) return volumetric_->stress_deformation_gradients(*this, u, F);
+  return deformation_gradients(u, F);
+}
+
 Index Model::deformation_gradients(std::span<const double> u, std::span<Mat3> F) const {
   return deformation_gradients(u, F, every_point());
 }

@@ -29,6 +29,12 @@ bool ModelView::shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std
 
 const Material& ModelView::ip_material(Index ip) const { return model_->ip_material(ip); }
 
+std::vector<Mat3> ModelView::stress_deformation_gradients(std::span<const double> u) const {
+  std::vector<Mat3> F(static_cast<std::size_t>(model_->integration_point_count()));
+  if (model_->stress_deformation_gradients(u, F) >= 0) F.clear();
+  return F;
+}
+
 Mat3 ModelView::deformation_gradient(Index ip, std::span<const double> u) const {
   return model_->deformation_gradient(ip, u);
 }

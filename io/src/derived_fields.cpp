@@ -26,13 +26,15 @@ const std::vector<DerivedField>& derived_fields() {
       {"green_strain", 9, "1", "E = (F^T F - I) / 2",
        [](const Mat3& F, const Material&, double* value) { store(0.5 * (F.transpose() * F - Mat3::Identity()), value); }},
       {"cauchy_stress", 9, "Pa", "sigma = F S F^T / J",
-       [](const Mat3& F, const Material& material, double* value) { store(cauchy_stress(F, material), value); }},
+       [](const Mat3& F, const Material& material, double* value) { store(cauchy_stress(F, material), value); },
+       true},
       {"von_mises_stress", 1, "Pa", "sqrt(3/2 s:s), s the deviator of the Cauchy stress",
        [](const Mat3& F, const Material& material, double* value) {
          const Mat3 cauchy = cauchy_stress(F, material);
          const Mat3 deviator = cauchy - cauchy.trace() / 3.0 * Mat3::Identity();
          *value = std::sqrt(1.5 * deviator.squaredNorm());
-       }},
+       },
+       true},
       {"jacobian", 1, "1", "J = det F, the volume ratio",
        [](const Mat3& F, const Material&, double* value) { *value = F.determinant(); }},
   };
@@ -42,6 +44,7 @@ const std::vector<DerivedField>& derived_fields() {
 std::vector<CellField> cell_fields(const ModelView& model, std::span<const double> u, const std::vector<std::string>& names) {
   std::vector<CellField> out;
   const auto tets = static_cast<std::size_t>(model.mesh().tet_count());
+  std::vector<Mat3> stress_gradients;  // computed for the first stress field named
   for (const auto& name : names) {
     const auto& all = derived_fields();
     const auto field = std::find_if(all.begin(), all.end(), [&](const DerivedField& f) { return f.name == name; });
@@ -50,8 +53,11 @@ std::vector<CellField> cell_fields(const ModelView& model, std::span<const doubl
     CellField cells{name, field->components, std::vector<double>(tets * components, 0.0)};
     std::vector<int> count(tets, 0);
     std::vector<double> value(components);
+    if (field->stress && stress_gradients.empty()) stress_gradients = model.stress_deformation_gradients(u);
     for (Index ip = 0; ip < model.integration_point_count(); ++ip) {
-      field->compute(model.deformation_gradient(ip, u), model.ip_material(ip), value.data());
+      const bool own = !field->stress || stress_gradients.empty();  // empty: an inadmissible state, as written
+      field->compute(own ? model.deformation_gradient(ip, u) : stress_gradients[static_cast<std::size_t>(ip)],
+                     model.ip_material(ip), value.data());
       const auto t = static_cast<std::size_t>(model.ip_tets()[ip]);
       ++count[t];
       for (std::size_t c = 0; c < components; ++c) cells.values[components * t + c] += value[c];

@@ -95,6 +95,12 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     return -1;
   }
 
+  Index stress_deformation_gradients(const Model& model, std::span<const double> u, std::span<Mat3> F) override {
+    if (const Index bad = averaged_dilatation(model, u, region_of(model, model.every_point())); bad >= 0) return bad;
+    for (std::size_t ip = 0; ip < F.size(); ++ip) F[ip] = std::cbrt(J_bar_[ip] / J_[ip]) * F_[ip];
+    return -1;
+  }
+
   double strain_energy(const Model& model, std::span<const double> u) override {
     if (averaged_dilatation(model, u, region_of(model, model.every_point())) >= 0)
       return std::numeric_limits<double>::quiet_NaN();

@@ -150,6 +150,9 @@ class Model {
   void scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f,
                         std::span<const PointRange> ranges) const;
   Mat3 deformation_gradient(Index ip, std::span<const double> u) const;
+  // The deformation gradient each point's stress comes from in internal_forces: the volumetric treatment's (F-bar's
+  // F_bar), else the point's own. Returns -1, or the lowest-numbered inadmissible point. Not re-entrant.
+  Index stress_deformation_gradients(std::span<const double> u, std::span<Mat3> F) const;
   // Interpolated displacement at every node: u(X_J) = sum_I N_I(X_J) u_I.
   void interpolate(std::span<const double> u, std::span<double> out) const;
   Vec3 interpolate_node(Index node, std::span<const double> u) const;

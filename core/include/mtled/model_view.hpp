@@ -45,6 +45,9 @@ class ModelView {
   const std::vector<Index>& ip_tets() const { return *ip_tets_; }          // the background tet each lies in
   const Material& ip_material(Index ip) const;
   Mat3 deformation_gradient(Index ip, std::span<const double> u) const;
+  // At every point, the deformation gradient its stress comes from in the forces (a volumetric treatment's F_bar,
+  // else its own F); empty when some point's F is inadmissible.
+  std::vector<Mat3> stress_deformation_gradients(std::span<const double> u) const;
   // Appends the nodes of point ip's support: the u_I deformation_gradient(ip, u) reads.
   void append_point_support(Index ip, std::vector<Index>& nodes) const;
   // Appends the nodes of node J's interpolation support: the u_I interpolate_node(J, u) reads.

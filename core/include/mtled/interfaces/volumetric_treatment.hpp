@@ -39,6 +39,10 @@ class VolumetricTreatment {
   virtual std::vector<PointRange> points_read(const Model& model, std::span<const PointRange> ranges);
   // E(u); NaN when some F is inadmissible.
   virtual double strain_energy(const Model& model, std::span<const double> u) = 0;
+  // The deformation gradient each integration point's stress is computed from in the forces (F-bar's F_bar),
+  // for outputs that show the stress the body carries. Returns -1, or the lowest-numbered inadmissible point. The
+  // default: each point's own F.
+  virtual Index stress_deformation_gradients(const Model& model, std::span<const double> u, std::span<Mat3> F);
 };
 
 }  // namespace mtled
