@@ -106,9 +106,14 @@ class SceneRun {
     write_state(folder_, "last_good_state.vtu", simulation_->model().view(),
                 inverted ? simulation_->previous_displacement() : simulation_->displacement(),
                 scene_.section("output"), false, folds);
-    summary_.record_instability(e.diagnostic(), "last_good_state.vtu");
+    // An inverted point beside the needle: where, against the needle, and what the scene can still do about it.
+    Diagnostic diagnostic = e.diagnostic();
+    const auto needle = simulation_->needle() ? std::optional(simulation_->needle()->status()) : std::nullopt;
+    if (inverted && needle && !diagnostic.coordinates.empty())
+      diagnostic.detail += fold_advice_at(scene_, *needle, diagnostic.coordinates.front());
+    summary_.record_instability(diagnostic, "last_good_state.vtu");
     summary_.write();
-    log().error("{}", e.what());
+    log().error("{}", InstabilityError(diagnostic).what());
     log().error("wrote {} with status \"unstable\"", (folder_.path() / "summary.json").string());
     return 3;
   }

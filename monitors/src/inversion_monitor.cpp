@@ -126,11 +126,23 @@ void InversionMonitor::check(const StepRecord& step) {
         step.step, inverted, smallest, node, point_text(mesh.points[node]));
 }
 
-std::string InversionMonitor::lever(const NeedleStatus* needle, double radial, bool pushed_by_boundary) const {
-  if (!needle || pushed_by_boundary)
+std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, double radial,
+                       const NodalConstraints* boundary) {
+  // A whole face held (a bonded platen): the free surface beside it creases, a fold only self-contact could follow.
+  constexpr std::size_t kFace = 8;
+  if (boundary && boundary->nodes().size() > kFace)
+    return fmt::format("the free surface creases where it meets the face boundary \"{}\" holds, a fold that only "
+                       "self-contact (not modelled) could follow: refine the cloud toward that edge to delay it, or "
+                       "stop the load before this state (docs/stability.md)",
+                       boundary->name);
+  if (boundary)
     return "a boundary condition pushes single nodes through the tissue: drive a surface or material points instead, "
            "or refine the mesh where it pushes";
-  if (advice_.needle_drives_nodes)
+  if (!needle)
+    return "the material folds over itself (a crease, such as where a free surface meets a face a boundary condition "
+           "holds), which only self-contact (not modelled) could follow: refine the cloud there to delay it, or stop "
+           "the load before this state (docs/stability.md)";
+  if (advice.needle_drives_nodes)
     return "the needle drives single nodes: drive material points on the shaft's surface instead "
            "(/needle/driven \"shaft_surface\")";
   // Measured on the brain phantom (docs/stability.md): a cloud refined along the path folds earlier, not later, and a
@@ -138,10 +150,12 @@ std::string InversionMonitor::lever(const NeedleStatus* needle, double radial, b
   if (radial < 0.02)
     return fmt::format(
         "the needle's drag has sheared the tissue beside its shaft past what the cloud can follow; "
-        "refining the cloud along the path makes it fold earlier, not later (docs/stability.md){}. "
-        "Stop the insertion before this depth (/needle/depth), or ramp slower (/integrator/load_steps) "
-        "to delay it a little",
-        advice_.refined_along ? ": coarsen the refinement (/mesh/refine_ratio closer to 1)" : "");
+        "refining the cloud along the path makes it fold earlier, not later (docs/stability.md){}. {}, "
+        "or stop the insertion before this depth (/needle/depth)",
+        advice.refined_along ? ": coarsen the refinement (/mesh/refine_ratio closer to 1)" : "",
+        advice.drag_limited ? "Lower the drag limit (/needle/drag_limit; docs/needle-models.md)"
+                             : "Let the tissue slip along the shaft once dragged a few millimetres (/needle/drag_limit, "
+                               "e.g. 0.006 m; docs/needle-models.md)");
   return "a driver pushes the material through itself away from the needle: drive a surface or material points "
          "there instead, or refine the mesh where it pushes";
 }
@@ -159,11 +173,11 @@ void InversionMonitor::stop(const StepRecord& step, Index worst, double smallest
                                                                                                     : 1.0;
   }
   // A vertex of the folded tet in a set a boundary condition drives (not the needle's): that condition pushes it.
-  bool pushed_by_boundary = false;
+  const NodalConstraints* boundary = nullptr;
   for (const NodalConstraints* set : step.constraint_sets)
-    if (set->name != "needle")
+    if (set->name != "needle" && set->name != "needle_shaft")
       for (const Index v : mesh.tets[worst])
-        pushed_by_boundary |= std::find(set->nodes().begin(), set->nodes().end(), v) != set->nodes().end();
+        if (std::find(set->nodes().begin(), set->nodes().end(), v) != set->nodes().end()) boundary = set;
   std::string where;
   double radial = 0.0;
   if (needle) {
@@ -181,7 +195,7 @@ void InversionMonitor::stop(const StepRecord& step, Index worst, double smallest
                   "zone (moved volume {:.3g} times its reference volume; node {} moved {:.3g} mm): the material folded "
                   "between integration points. To go on: {}; or set /monitors/inversion to \"warn\" to finish and "
                   "record the folds (last_good_state.vtu marks them in its cell field \"folded\")",
-                  worst, where, smallest, node, 1e3 * moved_by.norm(), lever(needle, radial, pushed_by_boundary)),
+                  worst, where, smallest, node, 1e3 * moved_by.norm(), fold_lever(advice_, needle, radial, boundary)),
       model, node);
 }
 

@@ -25,7 +25,16 @@ namespace mtled {
 struct FoldAdvice {
   bool needle_drives_nodes = false;  // the kinematic needle drives nodes, not material points on the shaft's surface
   bool refined_along = false;  // the mesh source refines the cloud along a segment (a Gmsh generator's refine_from)
+  bool drag_limited = false;   // the kinematic needle's drag is limited (/needle/drag_limit)
 };
+
+// What the scene may do about a fold (a tet turned over, or J <= 0 at an integration point): `needle` the needle's
+// state, if one is in (null otherwise); `radial` the fold's distance from its axis; `boundary` the constraint set (not
+// the needle's) that holds a vertex of the folded tet, if any.
+std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, double radial,
+                       const NodalConstraints* boundary);
+// What the scene already does, so that a fold's message never advises it.
+FoldAdvice fold_advice(const Scene& scene);
 
 class InversionMonitor final : public StepMonitor {
  public:
@@ -51,7 +60,6 @@ class InversionMonitor final : public StepMonitor {
   void check(const StepRecord& step);
   // The stop: where the fold is against the needle, how far it went, and the lever that applies.
   [[noreturn]] void stop(const StepRecord& step, Index worst, double smallest, Index node, Vec3 moved_by) const;
-  std::string lever(const NeedleStatus* needle, double radial, bool pushed_by_boundary) const;
 
   long every_;
   bool stop_;

@@ -1,5 +1,7 @@
 #include "mtled/monitors/scene_monitors.hpp"
 
+#include <fmt/format.h>
+
 #include "energy_monitor.hpp"
 #include "inversion_monitor.hpp"
 #include "stable_step_monitor.hpp"
@@ -20,20 +22,25 @@ SceneSection monitors_section() {
   return {"monitors", &declaration};
 }
 
-namespace {
-
-// What the scene already does, so that a fold's message never advises it.
 FoldAdvice fold_advice(const Scene& scene) {
   FoldAdvice advice;
   if (scene.needle) {
     const Parameters& needle = scene.needle->parameters;
     advice.needle_drives_nodes = needle.has("driven") && needle.string("driven") != "shaft_surface";
+    advice.drag_limited = needle.has("drag_limit");
   }
   advice.refined_along = scene.mesh.parameters.has("refine_from");  // the Gmsh generators' refinement
   return advice;
 }
 
-}  // namespace
+std::string fold_advice_at(const Scene& scene, const NeedleStatus& needle, const Vec3& position) {
+  const Vec3 x = position - needle.entry;
+  const double axial = needle.direction.dot(x), radial = (x - axial * needle.direction).norm();
+  if (needle.depth <= 0.0 || radial >= 0.02) return "";
+  return fmt::format("; at a needle depth of {:.1f} mm, {:.1f} mm from the needle's axis and {:.1f} mm under its "
+                     "entry: {}",
+                     1e3 * needle.depth, 1e3 * radial, 1e3 * axial, fold_lever(fold_advice(scene), &needle, radial, nullptr));
+}
 
 std::shared_ptr<const FoldedTets> add_scene_monitors(Simulation& simulation, const Scene& scene) {
   const Parameters& monitors = scene.section("monitors");

@@ -6,7 +6,9 @@
 //    material point on rings on the shaft's surface) is captured when the tip passes it and from then on is
 //    driven along the axis at C_D times the needle's advance (`drive` says from when), its lateral
 //    displacement held, returned to the needle's path or left free (`lateral`). Captured at their current
-//    displacement, driven entries never jump.
+//    displacement, driven entries never jump. With `drag_limit` (not in the paper) an entry dragged that far
+//    along the axis slips: it stays there while the shaft slides past. With `settle_steps` an entry moves from
+//    where it was captured to the prescription over that many steps, so the relaxed state forgets the capture.
 // The needle force is the force needed to impose this motion: the sum of the driven nodes' reactions along
 // the axis. Every modelling choice the paper leaves open is listed in docs/needle-models.md.
 #include <fmt/format.h>
@@ -62,6 +64,24 @@ class KinematicNeedle final : public NeedleModel {
              "shaft's surface (radius = the needle's, one ring per node spacing at the entry, about one point per "
              "node spacing around), whose interpolated displacement is prescribed: the same needle on every cloud, "
              "symmetric about its axis");
+    d.number("drag_limit")
+        .unit("m")
+        .positive()
+        .optional()
+        .doc("not in the paper: tissue on the shaft is dragged at C_D until its axial displacement reaches this, "
+             "then slips along the shaft and stays there (a sticking interface that gives way). Default: no limit, "
+             "the paper's model, under which the tissue at the entry is dragged C_D x depth (40 mm at 100 mm), "
+             "enough shear to fold the tissue beside the entry on some clouds (docs/stability.md). The paper's "
+             "experiments drag at most 0.4 x 15 mm = 6 mm, so a limit of 6 mm or more leaves them unchanged");
+    d.integer("settle_steps")
+        .unit("1")
+        .at_least(1)
+        .optional()
+        .doc("with drive = from_reference: an entry captured at its current displacement moves to C_D x (advance - s) "
+             "along the axis (and, with lateral = path, onto the path) over this many time steps, whether the load "
+             "advances or is held, so the relaxed state does not depend on how fast the load was ramped. Default: "
+             "none, the captured axial displacement stays a floor under C_D x (advance - s), which the ramp rate "
+             "changes (docs/validation.md)");
     d.number("capture_radius")
         .unit("m")
         .positive()
@@ -84,6 +104,8 @@ class KinematicNeedle final : public NeedleModel {
         path_(read_needle_path(p)),
         coefficient_(p.number("deformation_coefficient")),
         puncture_strain_(p.number("puncture_strain")),
+        drag_limit_(p.optional_number("drag_limit")),
+        settle_steps_(p.has("settle_steps") ? std::optional<long>(p.integer("settle_steps")) : std::nullopt),
         capture_radius_option_(p.optional_number("capture_radius")),
         strain_radius_option_(p.optional_number("strain_radius")),
         from_reference_(p.string("drive") == "from_reference"),
@@ -105,6 +127,10 @@ class KinematicNeedle final : public NeedleModel {
       nodes_.constraints.set_components({axis == 0, axis == 1, axis == 2});
       shaft_.constraints.set_components({axis == 0, axis == 1, axis == 2});
     }
+    if (settle_steps_ && !from_reference_)
+      throw InputError(p.pointer("settle_steps"),
+                       "settling onto the prescription needs a prescription that does not depend on the capture: "
+                       "set \"drive\" to \"from_reference\" (the default), or leave settle_steps out");
   }
 
   void setup(const ModelView& model) override {
@@ -137,7 +163,7 @@ class KinematicNeedle final : public NeedleModel {
 
     for (Index n : footprint_) {
       captured_[n] = 1;
-      nodes_.add_node(n, path_.axial(model.nodes()[n]), Vec3::Zero(), 0.0);
+      nodes_.add_node(n, path_.axial(model.nodes()[n]), Vec3::Zero(), 0.0, 0);
     }
     if (shaft_surface_)
       log().info("kinematic needle: footprint {} nodes, {} points on the shaft's surface in {} rings, C_D = {:g}",
@@ -149,6 +175,7 @@ class KinematicNeedle final : public NeedleModel {
 
   void update(const LoadState& load, const ModelView& model, std::span<const double> u) override {
     const double advance = load.load_fraction * path_.depth;
+    step_ = load.step;
     if (punctured_) {
       capture_passed(model, u, advance);
     } else if (tip_strain_.largest(model, u, path_.tip(advance)) > puncture_strain_) {
@@ -209,27 +236,30 @@ class KinematicNeedle final : public NeedleModel {
     NodalConstraints constraints;
     std::vector<Vec3> captured_at;        // displacement when the current driving began
     std::vector<double> capture_depth;    // needle advance when the current driving began
+    std::vector<long> capture_step;       // the time step it began at
     std::vector<double> reference_axial;  // axial coordinate of the entry's reference position
 
-    void add_node(Index node, double reference, const Vec3& displacement, double advance) {
+    void add_node(Index node, double reference, const Vec3& displacement, double advance, long step) {
       constraints.add_node(node, displacement);
-      remember(reference, displacement, advance);
+      remember(reference, displacement, advance, step);
     }
-    void add_point(const Vec3& point, double reference, const Vec3& displacement, double advance) {
+    void add_point(const Vec3& point, double reference, const Vec3& displacement, double advance, long step) {
       constraints.add_point(point, displacement);
-      remember(reference, displacement, advance);
+      remember(reference, displacement, advance, step);
     }
     void clear() {
       constraints.clear();
       captured_at.clear();
       capture_depth.clear();
+      capture_step.clear();
       reference_axial.clear();
     }
 
    private:
-    void remember(double reference, const Vec3& displacement, double advance) {
+    void remember(double reference, const Vec3& displacement, double advance, long step) {
       captured_at.push_back(displacement);
       capture_depth.push_back(advance);
+      capture_step.push_back(step);
       reference_axial.push_back(reference);
     }
   };
@@ -254,20 +284,32 @@ class KinematicNeedle final : public NeedleModel {
   }
 
   // The displacement of entry k of `set` at this advance: the footprint follows the tip until puncture;
-  // afterwards every driven entry moves along the axis at C_D times the advance (`drive`), its lateral part
-  // as `lateral` says.
+  // afterwards every driven entry moves along the axis at C_D times the advance (`drive`), up to the drag limit,
+  // its lateral part as `lateral` says.
   Vec3 prescribed(const DrivenSet& set, std::size_t k, double advance) const {
     const Vec3& start = set.captured_at[k];
     const double start_axial = start.dot(path_.direction);
     const Vec3 start_lateral = start - start_axial * path_.direction;
     const double since = std::max(0.0, advance - set.capture_depth[k]);
     double axial = start_axial + (punctured_ ? coefficient_ : 1.0) * since;
+    if (punctured_ && from_reference_ && settle_steps_) {
+      // From the captured displacement to the prescription, linearly in steps.
+      const Vec3 target = limited_drag(coefficient_ * (advance - set.reference_axial[k])) * path_.direction +
+                          (return_to_path_ ? Vec3::Zero() : start_lateral);
+      const double remaining =
+          std::max(0.0, 1.0 - static_cast<double>(step_ - set.capture_step[k]) / static_cast<double>(*settle_steps_));
+      return target + remaining * (start - target);
+    }
     if (punctured_ && from_reference_)
-      axial = std::max(start_axial, coefficient_ * (advance - set.reference_axial[k]));
+      axial = std::max(start_axial, limited_drag(coefficient_ * (advance - set.reference_axial[k])));
+    else if (punctured_)
+      axial = start_axial + limited_drag(coefficient_ * since);
     double lateral_share = 1.0;
     if (return_to_path_) lateral_share = std::max(0.0, 1.0 - since / lateral_ramp_);
     return axial * path_.direction + lateral_share * start_lateral;
   }
+
+  double limited_drag(double drag) const { return drag_limit_ ? std::min(drag, *drag_limit_) : drag; }
 
   // Captures what the tip has passed. At the first call (puncture) the footprint restarts: from then on it
   // moves with C_D like every captured entry; with shaft_surface the ring at the entry replaces it (the
@@ -277,6 +319,7 @@ class KinematicNeedle final : public NeedleModel {
       for (std::size_t k = 0; k < nodes_.constraints.size(); ++k) {
         nodes_.captured_at[k] = nodes_.constraints.values[k];
         nodes_.capture_depth[k] = depth_;
+        nodes_.capture_step[k] = step_;
       }
       if (shaft_surface_) nodes_.clear();
       restarted_footprint_ = true;
@@ -291,7 +334,7 @@ class KinematicNeedle final : public NeedleModel {
       const Vec3 displacement = model.interpolate_node(n, u);
       if (!passed(model.nodes()[n], displacement)) break;
       captured_[n] = 1;
-      nodes_.add_node(n, path_.axial(model.nodes()[n]), displacement, advance);
+      nodes_.add_node(n, path_.axial(model.nodes()[n]), displacement, advance, step_);
     }
     for (; next_point_ < shaft_candidates_.size(); ++next_point_) {
       const ShaftPoint& point = shaft_candidates_[next_point_];
@@ -299,7 +342,7 @@ class KinematicNeedle final : public NeedleModel {
       for (std::size_t k = 0; k < point.support.size(); ++k)
         displacement += point.values[k] * Vec3(&u[3 * static_cast<std::size_t>(point.support[k])]);
       if (!passed(point.position, displacement)) break;
-      shaft_.add_point(point.position, path_.axial(point.position), displacement, advance);
+      shaft_.add_point(point.position, path_.axial(point.position), displacement, advance, step_);
     }
   }
 
@@ -312,6 +355,8 @@ class KinematicNeedle final : public NeedleModel {
   Parameters parameters_;
   NeedlePath path_;
   double coefficient_, puncture_strain_;
+  std::optional<double> drag_limit_;  // none: the paper's unlimited drag
+  std::optional<long> settle_steps_;  // none: the captured axial displacement stays a floor
   std::optional<double> capture_radius_option_, strain_radius_option_;
   bool from_reference_;
   bool return_to_path_;  // lateral "path"; "free" only changes the constrained components
@@ -327,6 +372,7 @@ class KinematicNeedle final : public NeedleModel {
   DrivenSet nodes_, shaft_;  // footprint and captured nodes; captured shaft points
   bool punctured_ = false, restarted_footprint_ = false;
   double depth_ = 0.0, puncture_depth_ = 0.0;
+  long step_ = 0;
 };
 
 }  // namespace mtled

@@ -22,8 +22,8 @@ constexpr double kHeight = 8e-3;
 constexpr double kCoefficient = 0.4;
 
 json scene_json(const json& needle_options, const json& direction = {0, 0, -1}) {
-  json needle = {{"type", "kinematic"},  {"diameter", 1.6e-3},        {"entry", {0.0, 0.0, kHeight}},
-                 {"direction", direction}, {"depth", kDepth}, {"deformation_coefficient", kCoefficient}};
+  json needle = {{"type", "kinematic"},    {"diameter", 1.6e-3}, {"entry", {0.0, 0.0, kHeight}},
+                 {"direction", direction}, {"depth", kDepth},    {"deformation_coefficient", kCoefficient}};
   needle.update(needle_options);
   return test::gel_cylinder_scene(kHeight, needle);
 }
@@ -41,11 +41,11 @@ struct Outcome {
   double spacing = 0.0;
 };
 
-
-Outcome run(const json& needle_options) {
+Outcome run(const json& needle_options, const json& integrator_options = json::object()) {
   const test::OneThread one_thread;
-  const Scene scene = validate_scene(parse_scene(scene_json(needle_options).dump(), "kinematic_test.json"),
-                                     test::catalog());
+  json scene_file = scene_json(needle_options);
+  scene_file["integrator"].update(integrator_options);
+  const Scene scene = validate_scene(parse_scene(scene_file.dump(), "kinematic_test.json"), test::catalog());
   Simulation simulation(scene, test::catalog());
   simulation.run();
   Outcome out;
@@ -121,7 +121,8 @@ TEST(KinematicNeedle, FreeLateralPrescribesOnlyTheAxialComponent) {
   EXPECT_EQ(out.status.phase, NeedlePhase::penetration);
   // Nothing holds the driven nodes across the axis: some move sideways.
   double largest_lateral = 0.0;
-  for (const Driven& d : out.driven) largest_lateral = std::max(largest_lateral, std::hypot(d.displacement.x(), d.displacement.y()));
+  for (const Driven& d : out.driven)
+    largest_lateral = std::max(largest_lateral, std::hypot(d.displacement.x(), d.displacement.y()));
   EXPECT_GT(largest_lateral, 1e-7);
 }
 
@@ -152,6 +153,49 @@ TEST(KinematicNeedle, ShaftSurfacePointsFollowTheNeedleAroundTheAxis) {
   EXPECT_TRUE(out.driven.empty());
   // Full rings: the points balance about the axis.
   EXPECT_LT(offset_sum.norm(), 1e-12);
+}
+
+// drag_limit (not in the paper): the tissue on the shaft follows it at C_D until dragged that far, then stays
+// while the shaft slides past; a limit the run never reaches changes nothing.
+TEST(KinematicNeedle, ADragLimitHoldsTheTissueThereWhileTheShaftSlidesPast) {
+  const double limit = 1e-3;  // the entry would be dragged C_D x 5 mm = 2 mm
+  const Outcome out = run({{"drag_limit", limit}});
+  EXPECT_EQ(out.status.phase, NeedlePhase::penetration);
+  int slipped = 0, following = 0;
+  for (const Driven& d : out.shaft) {
+    const double unlimited = kCoefficient * (kDepth - d.reference_axial);
+    if (unlimited > limit) {
+      ++slipped;
+      EXPECT_NEAR(-d.displacement.z(), limit, 1e-12) << "at " << d.reference_axial;
+    } else if (unlimited > 0.0) {
+      ++following;
+      EXPECT_GE(-d.displacement.z(), unlimited - 1e-12) << "at " << d.reference_axial;
+    }
+  }
+  EXPECT_GE(slipped, 3);
+  EXPECT_GE(following, 3);
+
+  const Outcome paper = run(json::object());
+  const Outcome unreached = run({{"drag_limit", 1.01 * kCoefficient * kDepth}});
+  EXPECT_EQ(unreached.status.force, paper.status.force);
+  // The slipped tissue no longer resists the advance as the dragged tissue did: less force.
+  EXPECT_LT(out.status.force, paper.status.force);
+}
+
+// settle_steps: each captured entry moves from where it was captured onto C_D x (advance - s) over that many steps, so
+// the relaxed state forgets the captures and the ramp rate stops mattering; the default keeps the captured axial
+// displacement as a floor, which a faster ramp captures lower.
+TEST(KinematicNeedle, SettlingForgetsTheCapturesSoTheRampRateDoesNotMatter) {
+  const auto force = [](const json& needle, long load_steps) {
+    return run(needle, {{"load_steps", load_steps}, {"tolerance", 1e-6}}).status.force;
+  };
+  const json settle = {{"settle_steps", 50}};
+  const double fast = force(settle, 40), slow = force(settle, 320);
+  ASSERT_GT(slow, 0.0);
+  // The relaxation's tolerance (1e-6 of the largest displacement) leaves the force within about 1e-4.
+  EXPECT_NEAR(fast, slow, 1e-3 * slow);
+  const double fast_floor = force(json::object(), 40), slow_floor = force(json::object(), 320);
+  EXPECT_GT(std::abs(fast_floor - slow_floor), 1e-2 * slow_floor) << "the default no longer depends on the ramp";
 }
 
 TEST(KinematicNeedle, FreeLateralRefusesAnObliqueNeedle) {
@@ -216,8 +260,7 @@ TEST(MarkupsTrajectory, ReadsSlicersLineAndPointList) {
   refused(R"({"markups": [{"coordinateSystem": "IJK"}]})", "coordinateSystem");
   refused(R"({"markups": [{"coordinateUnits": "cm"}]})", "coordinateUnits");
   refused(R"({"markups": [{"controlPoints": [{"position": [0, 0, 0]}]}]})", "needs two");
-  refused(R"({"markups": [{"controlPoints": [{"position": [0, 0]}, {"position": [0, 0, 1]}]}]})",
-          "/controlPoints/0");
+  refused(R"({"markups": [{"controlPoints": [{"position": [0, 0]}, {"position": [0, 0, 1]}]}]})", "/controlPoints/0");
   refused(R"({"markups": [{"controlPoints": [{"position": [1, 1, 1]}, {"position": [1, 1, 1]}]}]})", "same point");
 }
 

@@ -507,7 +507,8 @@ TEST(Cli, AFoldAwayFromTheNeedleStopsTheRunWhereTheNeedleCutsDoNot) {
   EXPECT_EQ(result.exit_code, 3) << result.output;
   summary = test::read_json(folder / "surface" / "summary.json");
   const std::string surface_detail = summary["diagnostic"]["detail"].get<std::string>();
-  expect_contains(surface_detail, "Stop the insertion before this depth (/needle/depth)");
+  expect_contains(surface_detail, "stop the insertion before this depth (/needle/depth)");
+  expect_contains(surface_detail, "/needle/drag_limit");  // the scene's drag is the paper's, unlimited
   EXPECT_EQ(surface_detail.find("shaft_surface"), std::string::npos) << surface_detail;
 }
 

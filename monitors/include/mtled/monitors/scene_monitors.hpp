@@ -24,4 +24,9 @@ struct FoldedTets {
 // Adds the checks; returns what the inversion check marks when it stops a run.
 std::shared_ptr<const FoldedTets> add_scene_monitors(Simulation& simulation, const Scene& scene);
 
+// For an inverted material point at `position` within 20 mm of the needle's axis: where it is against the needle and
+// the lever the scene can still pull ("; at a needle depth of ...: ..."); empty farther away or before the needle
+// went in.
+std::string fold_advice_at(const Scene& scene, const NeedleStatus& needle, const Vec3& position);
+
 }  // namespace mtled
