@@ -42,7 +42,10 @@ int thread_count(const RunOptions& options) {
 class SceneRun {
  public:
   SceneRun(const RunOptions& options, const Scene& scene, PluginCatalog& catalog, Clock::time_point wall_start)
-      : wall_start_(wall_start), scene_(scene), catalog_(catalog), folder_(output_folder(options)),
+      : wall_start_(wall_start),
+        scene_(scene),
+        catalog_(catalog),
+        folder_(output_folder(options)),
         summary_(folder_, {{"mtled_version", MTLED_VERSION_STRING},
                            {"scene", fs::absolute(options.scene.scene).string()},
                            {"overrides", options.scene.overrides},
@@ -104,8 +107,8 @@ class SceneRun {
     std::vector<CellField> folds;
     if (folded_ && !folded_->per_tet.empty()) folds.push_back({"folded", 1, folded_->per_tet});
     write_state(folder_, "last_good_state.vtu", simulation_->model().view(),
-                inverted ? simulation_->previous_displacement() : simulation_->displacement(),
-                scene_.section("output"), false, folds);
+                inverted ? simulation_->previous_displacement() : simulation_->displacement(), scene_.section("output"),
+                false, folds);
     // An inverted point beside the needle: where, against the needle, and what the scene can still do about it.
     Diagnostic diagnostic = e.diagnostic();
     const auto needle = simulation_->needle() ? std::optional(simulation_->needle()->status()) : std::nullopt;

@@ -131,10 +131,11 @@ std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, dou
   // A whole face held (a bonded platen): the free surface beside it creases, a fold only self-contact could follow.
   constexpr std::size_t kFace = 8;
   if (boundary && boundary->nodes().size() > kFace)
-    return fmt::format("the free surface creases where it meets the face boundary \"{}\" holds, a fold that only "
-                       "self-contact (not modelled) could follow: refine the cloud toward that edge to delay it, or "
-                       "stop the load before this state (docs/stability.md)",
-                       boundary->name);
+    return fmt::format(
+        "the free surface creases where it meets the face boundary \"{}\" holds, a fold that only "
+        "self-contact (not modelled) could follow: refine the cloud toward that edge to delay it, or "
+        "stop the load before this state (docs/stability.md)",
+        boundary->name);
   if (boundary)
     return "a boundary condition pushes single nodes through the tissue: drive a surface or material points instead, "
            "or refine the mesh where it pushes";
@@ -154,8 +155,8 @@ std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, dou
         "or stop the insertion before this depth (/needle/depth)",
         advice.refined_along ? ": coarsen the refinement (/mesh/refine_ratio closer to 1)" : "",
         advice.drag_limited ? "Lower the drag limit (/needle/drag_limit; docs/needle-models.md)"
-                             : "Let the tissue slip along the shaft once dragged a few millimetres (/needle/drag_limit, "
-                               "e.g. 0.006 m; docs/needle-models.md)");
+                            : "Let the tissue slip along the shaft once dragged a few millimetres (/needle/drag_limit, "
+                              "e.g. 0.006 m; docs/needle-models.md)");
   return "a driver pushes the material through itself away from the needle: drive a surface or material points "
          "there instead, or refine the mesh where it pushes";
 }

@@ -37,9 +37,10 @@ std::string fold_advice_at(const Scene& scene, const NeedleStatus& needle, const
   const Vec3 x = position - needle.entry;
   const double axial = needle.direction.dot(x), radial = (x - axial * needle.direction).norm();
   if (needle.depth <= 0.0 || radial >= 0.02) return "";
-  return fmt::format("; at a needle depth of {:.1f} mm, {:.1f} mm from the needle's axis and {:.1f} mm under its "
-                     "entry: {}",
-                     1e3 * needle.depth, 1e3 * radial, 1e3 * axial, fold_lever(fold_advice(scene), &needle, radial, nullptr));
+  return fmt::format(
+      "; at a needle depth of {:.1f} mm, {:.1f} mm from the needle's axis and {:.1f} mm under its "
+      "entry: {}",
+      1e3 * needle.depth, 1e3 * radial, 1e3 * axial, fold_lever(fold_advice(scene), &needle, radial, nullptr));
 }
 
 std::shared_ptr<const FoldedTets> add_scene_monitors(Simulation& simulation, const Scene& scene) {
