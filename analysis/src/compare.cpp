@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "mtled/errors.hpp"
+#include "mtled/analysis/mls_transfer.hpp"
 #include "mtled/analysis/result_file.hpp"
 #include "mtled/analysis/svg.hpp"
 #include "mtled/mesh.hpp"
@@ -24,47 +25,10 @@ const char* const kNrmseDefinition =
 
 std::vector<Vec3> interpolate_displacements(const std::vector<Vec3>& nodes, const std::vector<Vec3>& displacement,
                                             const std::vector<Vec3>& points, PluginCatalog& catalog) {
-  const ComponentDeclaration& declaration = catalog.load(Category::shape_function, "mls", "mtled compare");
-  std::vector<Problem> problems;
-  const Parameters parameters = validate_parameters(declaration, json::object(), "", problems);
-  const auto mls = catalog.create<ShapeFunctions>("mls", parameters);
-
-  const PointSearch search(nodes);
-  constexpr std::size_t kNeighbours = 10;
-  std::vector<double> radius(nodes.size());
-  std::vector<Index> nearest;
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    search.nearest(nodes[i], kNeighbours + 1, nearest);  // the node itself comes first
-    radius[i] = 1.3 * (nodes[static_cast<std::size_t>(nearest.back())] - nodes[i]).norm();
-  }
-  const double max_radius = *std::max_element(radius.begin(), radius.end());
-
-  std::vector<Vec3> out(points.size(), Vec3::Zero());
-  std::vector<Index> candidates, support;
-  std::vector<Vec3> coordinates;
-  std::vector<double> radii, values;
-  for (std::size_t p = 0; p < points.size(); ++p) {
-    search.within(points[p], max_radius, candidates);
-    support.clear();
-    for (Index i : candidates)
-      if ((nodes[static_cast<std::size_t>(i)] - points[p]).norm() < radius[static_cast<std::size_t>(i)]) support.push_back(i);
-    if (static_cast<int>(support.size()) < mls->minimum_support_size()) {
-      // Outside A's cloud (a coarser boundary): fall back to the nearest nodes.
-      search.nearest(points[p], 2 * kNeighbours, support);
-    }
-    coordinates.clear();
-    radii.clear();
-    for (Index i : support) {
-      coordinates.push_back(nodes[static_cast<std::size_t>(i)]);
-      radii.push_back(std::max(radius[static_cast<std::size_t>(i)],
-                               1.01 * (nodes[static_cast<std::size_t>(i)] - points[p]).norm()));
-    }
-    values.resize(support.size());
-    if (!mls->evaluate(points[p], coordinates, radii, values, {}).ok)
-      throw std::runtime_error(fmt::format("cannot interpolate at ({:g}, {:g}, {:g}): degenerate neighbourhood",
-                                           points[p][0], points[p][1], points[p][2]));
-    for (std::size_t k = 0; k < support.size(); ++k) out[p] += values[k] * displacement[static_cast<std::size_t>(support[k])];
-  }
+  const MlsTransfer transfer(nodes, catalog);
+  std::vector<Vec3> out;
+  out.reserve(points.size());
+  for (const Vec3& x : points) out.push_back(transfer.at(x, displacement));
   return out;
 }
 

@@ -1,0 +1,134 @@
+#include "mtled/analysis/grid_field.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "mtled/analysis/mls_transfer.hpp"
+
+namespace mtled {
+
+namespace {
+
+// Calls visit(voxel, barycentric coordinates of its centre) for each voxel whose centre lies in the tet with vertices
+// x (on a face counts: a voxel on a face shared by two tets is visited by both).
+template <class Visit>
+void rasterize(const VoxelGrid& grid, const Mat3& to_index, const std::array<Vec3, 4>& x, Visit&& visit) {
+  Mat3 edges;
+  for (int c = 0; c < 3; ++c) edges.col(c) = x[static_cast<std::size_t>(c) + 1] - x[0];
+  const double volume = edges.determinant();
+  if (!(std::abs(volume) > 0.0)) return;
+  const Mat3 to_barycentric = edges.inverse();
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Vec3& p : x) {
+    const Vec3 q = to_index * (p - grid.origin);
+    lo = lo.cwiseMin(q);
+    hi = hi.cwiseMax(q);
+  }
+  std::array<std::int64_t, 3> first{}, last{};
+  for (std::size_t a = 0; a < 3; ++a) {
+    first[a] = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(lo[static_cast<Index>(a)] - 1e-9)));
+    last[a] = std::min<std::int64_t>(grid.size[a] - 1,
+                                     static_cast<std::int64_t>(std::floor(hi[static_cast<Index>(a)] + 1e-9)));
+  }
+  constexpr double kOnFace = -1e-12;
+  for (std::int64_t k = first[2]; k <= last[2]; ++k)
+    for (std::int64_t j = first[1]; j <= last[1]; ++j)
+      for (std::int64_t i = first[0]; i <= last[0]; ++i) {
+        const Vec3 b = to_barycentric * (grid.centre(i, j, k) - x[0]);
+        const double b0 = 1.0 - b.sum();
+        if (b0 >= kOnFace && b.minCoeff() >= kOnFace)
+          visit(i + grid.size[0] * (j + grid.size[1] * k), std::array<double, 4>{b0, b[0], b[1], b[2]});
+      }
+}
+
+std::array<Vec3, 4> vertices(const std::vector<Vec3>& points, const std::array<Index, 4>& tet) {
+  return {points[static_cast<std::size_t>(tet[0])], points[static_cast<std::size_t>(tet[1])],
+          points[static_cast<std::size_t>(tet[2])], points[static_cast<std::size_t>(tet[3])]};
+}
+
+void forward(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, GridField& out) {
+  const Mat3 to_index = grid.axes.inverse();
+  std::vector<char> inside(static_cast<std::size_t>(grid.count()), 0);
+  for (const auto& tet : body.tets)
+    rasterize(grid, to_index, vertices(body.nodes, tet),
+              [&](std::int64_t v, const std::array<double, 4>&) { inside[static_cast<std::size_t>(v)] = 1; });
+  for (std::int64_t k = 0; k < grid.size[2]; ++k)
+    for (std::int64_t j = 0; j < grid.size[1]; ++j)
+      for (std::int64_t i = 0; i < grid.size[0]; ++i) {
+        const auto v = static_cast<std::size_t>(i + grid.size[0] * (j + grid.size[1] * k));
+        if (!inside[v]) continue;
+        ++out.inside;
+        out.values[v] = transfer.at(grid.centre(i, j, k), body.displacement);
+      }
+}
+
+void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, double tolerance,
+                GridField& out) {
+  const Mat3 to_index = grid.axes.inverse();
+  std::vector<Vec3> moved(body.nodes.size());
+  for (std::size_t n = 0; n < moved.size(); ++n) moved[n] = body.nodes[n] + body.displacement[n];
+  // Per voxel: the first moved tet found around its centre, and where that tet's linear map takes it back.
+  constexpr Index kNone = -1;
+  std::vector<Index> found(static_cast<std::size_t>(grid.count()), kNone);
+  std::vector<Vec3> start(found.size());
+  std::vector<char> folded(found.size(), 0);
+  for (std::size_t t = 0; t < body.tets.size(); ++t) {
+    const auto reference = vertices(body.nodes, body.tets[t]);
+    rasterize(grid, to_index, vertices(moved, body.tets[t]), [&](std::int64_t v, const std::array<double, 4>& b) {
+      const auto s = static_cast<std::size_t>(v);
+      const Vec3 X = b[0] * reference[0] + b[1] * reference[1] + b[2] * reference[2] + b[3] * reference[3];
+      if (found[s] == kNone) {
+        found[s] = static_cast<Index>(t);
+        start[s] = X;
+      } else if ((X - start[s]).norm() > 1e-6 * (reference[1] - reference[0]).norm()) {
+        folded[s] = 1;  // two moved tets hold the point with different reference points: not a shared face
+      }
+    });
+  }
+  for (std::int64_t k = 0; k < grid.size[2]; ++k)
+    for (std::int64_t j = 0; j < grid.size[1]; ++j)
+      for (std::int64_t i = 0; i < grid.size[0]; ++i) {
+        const auto v = static_cast<std::size_t>(i + grid.size[0] * (j + grid.size[1] * k));
+        if (found[v] == kNone) continue;
+        ++out.inside;
+        out.overlapping += folded[v];
+        // Newton's method with the tet's deformation gradient as the Jacobian of X + u(X).
+        const auto& tet = body.tets[static_cast<std::size_t>(found[v])];
+        const auto reference = vertices(body.nodes, tet), now = vertices(moved, tet);
+        Mat3 dX, dx;
+        for (int c = 0; c < 3; ++c) {
+          dX.col(c) = reference[static_cast<std::size_t>(c) + 1] - reference[0];
+          dx.col(c) = now[static_cast<std::size_t>(c) + 1] - now[0];
+        }
+        const Mat3 step = dX * dx.inverse();  // F^-1 of the tet's linear map
+        const Vec3 x = grid.centre(i, j, k);
+        Vec3 X = start[v];
+        Vec3 r = X + transfer.at(X, body.displacement) - x;
+        for (int iteration = 0; iteration < 30 && r.norm() > tolerance; ++iteration) {
+          X -= step * r;
+          r = X + transfer.at(X, body.displacement) - x;
+        }
+        const double residual = r.norm();
+        out.not_converged += residual > tolerance;
+        out.largest_residual = std::max(out.largest_residual, residual);
+        out.values[v] = X - x;
+      }
+}
+
+}  // namespace
+
+GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, FieldDirection direction,
+                               PluginCatalog& catalog, double tolerance) {
+  GridField out;
+  out.values.assign(static_cast<std::size_t>(grid.count()), Vec3::Zero());
+  const MlsTransfer transfer(body.nodes, catalog);
+  if (direction == FieldDirection::forward)
+    forward(body, grid, transfer, out);
+  else
+    resampling(body, grid, transfer, tolerance, out);
+  return out;
+}
+
+}  // namespace mtled
