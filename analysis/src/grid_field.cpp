@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "mtled/analysis/mls_transfer.hpp"
 
@@ -104,15 +105,24 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
         }
         const Mat3 step = dX * dx.inverse();  // F^-1 of the tet's linear map
         const Vec3 x = grid.centre(i, j, k);
-        Vec3 X = start[v];
-        Vec3 r = X + transfer.at(X, body.displacement) - x;
+        const auto residual = [&](const Vec3& X) { return Vec3(X + transfer.at(X, body.displacement) - x); };
+        Vec3 X = start[v], r = residual(X);
+        // Newton with the tet's deformation gradient as the Jacobian of X + u(X); it stops where a step no longer
+        // lowers the residual (a point the moved tets fold over, or a field too rough for the tet's gradient).
         for (int iteration = 0; iteration < 30 && r.norm() > tolerance; ++iteration) {
-          X -= step * r;
-          r = X + transfer.at(X, body.displacement) - x;
+          const Vec3 next = X - step * r;
+          Vec3 r_next;
+          try {
+            r_next = residual(next);
+          } catch (const std::runtime_error&) {  // a step out of the cloud, where MLS has no neighbourhood
+            break;
+          }
+          if (!(r_next.norm() < r.norm())) break;
+          X = next;
+          r = r_next;
         }
-        const double residual = r.norm();
-        out.not_converged += residual > tolerance;
-        out.largest_residual = std::max(out.largest_residual, residual);
+        out.not_converged += r.norm() > tolerance;
+        out.largest_residual = std::max(out.largest_residual, r.norm());
         out.values[v] = X - x;
       }
 }

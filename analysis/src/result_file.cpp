@@ -51,6 +51,8 @@ ResultField read_result_vtu(const fs::path& file) {
   const double to_metres = vtk::metres_per_length_unit(grid, file.string());
   ResultField result;
   for (const Vec3& p : grid.points) result.points.push_back(p * to_metres);
+  result.tets = grid.tets;
+  result.coordinate_system = grid.coordinate_system;
   for (std::size_t i = 0; i < grid.points.size(); ++i)
     result.displacement.push_back(
         to_metres * Vec3{displacement->values[3 * i], displacement->values[3 * i + 1], displacement->values[3 * i + 2]});

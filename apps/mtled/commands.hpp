@@ -26,6 +26,14 @@ struct MeshOptions {
   std::filesystem::path output;  // FILE.inp
 };
 
+struct FieldOptions {
+  std::filesystem::path run;     // run folder or result .vtu
+  std::filesystem::path like;    // an image whose grid the field is sampled on (NRRD, NIfTI)
+  std::filesystem::path output;  // .nrrd
+  std::string direction = "resampling";  // or "forward"
+  std::string frame;             // "LPS" or "RAS": the result's frame when its mesh recorded none
+};
+
 struct CompareOptions {
   std::filesystem::path a, b;       // run folders or result .vtu files
   bool json = false;                // machine-readable output
@@ -70,6 +78,7 @@ int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as
                  const std::string& describe);
 int print_schema(const std::vector<std::filesystem::path>& plugin_paths);
 int compare_command(const CompareOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
+int field_command(const FieldOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
 int study_command(const StudyOptions& options);
 int fit_command(const FitOptions& options);
 // Replaces the process by the conformance runner (its exit code: 0 when every suite passed).

@@ -25,12 +25,13 @@ struct Commands {
   bool as_json = false, as_markdown = false;
   std::string describe;
   mtled::app::CompareOptions compare;
+  mtled::app::FieldOptions field;
   mtled::app::StudyOptions study;
   mtled::app::FitOptions fit;
   mtled::app::ConformanceOptions conformance;
   CLI::App *run_cmd = nullptr, *validate_cmd = nullptr, *plugins_cmd = nullptr, *schema_cmd = nullptr,
            *compare_cmd = nullptr, *study_cmd = nullptr, *conformance_cmd = nullptr, *mesh_cmd = nullptr,
-           *fit_cmd = nullptr;
+           *fit_cmd = nullptr, *field_cmd = nullptr;
 };
 
 void add_global_options(CLI::App& cli, Commands& c) {
@@ -88,6 +89,18 @@ void add_analysis_commands(CLI::App& cli, Commands& c) {
   c.compare_cmd->add_option("--histogram", c.compare.histogram, "write histograms of u_A - u_B per component (SVG)");
   c.compare_cmd->add_option("--bins", c.compare.bins, "histogram bins (default 41)")->check(CLI::PositiveNumber);
 
+  c.field_cmd = cli.add_subcommand(
+      "field", "a run's displacement on an image's grid, as a displacement-field NRRD for 3D Slicer and ITK "
+               "(docs/label-maps.md)");
+  c.field_cmd->add_option("run", c.field.run, "run folder (or result .vtu)")->required();
+  c.field_cmd->add_option("--like", c.field.like, "image whose grid the field is sampled on (NRRD, NIfTI)")->required();
+  c.field_cmd->add_option("-o,--output", c.field.output, "the field (.nrrd)")->required();
+  c.field_cmd->add_option("--direction", c.field.direction,
+                          "resampling (default: at each voxel of the deformed body, the step back to its reference "
+                          "point, what Slicer and ITK resample with) or forward (at each voxel of the reference body, "
+                          "where its material goes)");
+  c.field_cmd->add_option("--frame", c.field.frame, "LPS or RAS: the frame of a mesh that records none");
+
   c.study_cmd = cli.add_subcommand("study", "run a sweep of scene settings against a reference (docs/studies.md)");
   c.study_cmd->add_option("study", c.study.study, "study file (JSON)")->required();
   c.study_cmd->add_option("-o,--output", c.study.output, "the study's folder (study.csv, study.json, error_vs_time.svg, runs/)")
@@ -128,6 +141,7 @@ int dispatch(Commands& c) {
   if (*c.plugins_cmd) return app::list_plugins(c.plugin_paths, c.as_json, c.as_markdown, c.describe);
   if (*c.schema_cmd) return app::print_schema(c.plugin_paths);
   if (*c.compare_cmd) return app::compare_command(c.compare, c.plugin_paths);
+  if (*c.field_cmd) return app::field_command(c.field, c.plugin_paths);
   if (*c.study_cmd) return app::study_command(c.study);
   if (*c.fit_cmd) return app::fit_command(c.fit);
   if (*c.conformance_cmd) return app::conformance_command(c.conformance, c.plugin_paths);

@@ -1,7 +1,9 @@
 #pragma once
 // Reading a run's result back: the result file of a run folder, and the points and interpolated
 // displacements of a result.vtu that mtled wrote (io/include/mtled/io/output.hpp writes them).
+#include <array>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "mtled/types.hpp"
@@ -15,6 +17,8 @@ std::filesystem::path result_file_of(const std::filesystem::path& run);
 struct ResultField {
   std::vector<Vec3> points;
   std::vector<Vec3> displacement;
+  std::vector<std::array<Index, 4>> tets;  // the background tets
+  std::string coordinate_system;           // "LPS" or "RAS" when the mesh recorded its frame, else empty
 };
 // InputError naming the file (and line) when it is not an mtled result.
 ResultField read_result_vtu(const std::filesystem::path& file);

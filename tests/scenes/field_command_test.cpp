@@ -1,0 +1,101 @@
+// mtled field: a run's displacement on an image's grid as a displacement-field NRRD. The uniaxial cube's field is
+// homogeneous (the run reproduces it to about 1e-9 m), so at every voxel the file must hold the affine map fitted to
+// the run's nodes: forward u(X) inside the reference cube, resampling X - x with X + u(X) = x inside the moved one,
+// within 1e-6 m (the file stores millimetres as float); zero outside. A run whose mesh records no frame needs one.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cstring>
+
+#include "mtled/analysis/result_file.hpp"
+#include "mtled/io/label_image.hpp"
+#include "test_support.hpp"
+
+namespace fs = std::filesystem;
+
+namespace mtled {
+namespace {
+
+// The voxel vectors of a field mtled wrote (metres), after checking its header says what Slicer needs.
+std::vector<Vec3> read_field(const fs::path& file) {
+  const std::string bytes = test::read_text(file);
+  const std::size_t end = bytes.find("\n\n");
+  const std::string header = bytes.substr(0, end);
+  for (const char* line : {"dimension: 4", "kinds: vector domain domain domain", "sizes: 3 24 24 24",
+                           "space: left-posterior-superior", "encoding: gzip", "type: float"})
+    EXPECT_NE(header.find(line), std::string::npos) << line << " in\n" << header;
+  const std::string raw = gunzip(bytes.substr(end + 2), file.string());
+  std::vector<float> values(raw.size() / sizeof(float));
+  std::memcpy(values.data(), raw.data(), raw.size());
+  std::vector<Vec3> out;
+  for (std::size_t v = 0; v + 2 < values.size(); v += 3)
+    out.push_back(1e-3 * Vec3(values[v], values[v + 1], values[v + 2]));
+  return out;
+}
+
+TEST(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
+  const fs::path folder = test::scratch_dir("field-command");
+  const auto run =
+      test::run_mtled({"run", (fs::path(MTLED_TEST_SOURCE_DIR) / "share/scenes/uniaxial_cube_ogden.json").string(),
+                       "-o", (folder / "run").string(), "--threads", "1", "--no-progress"});
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  // A 24^3 grid of 0.6 mm voxels from (-1, -1, -1) mm: it holds the 10 mm cube and the cube compressed to 8 mm.
+  const fs::path grid = folder / "grid.nrrd";
+  const std::string write = (fs::path(MTLED_TEST_SOURCE_DIR) / "scripts/label_maps/write_label_map.py").string() +
+                            " cube " + grid.string() + " --size 24 --spacing 0.6 --origin -1 -1 -1";
+  ASSERT_EQ(std::system(write.c_str()), 0) << write;
+
+  // The affine map u = A X + b that fits the run's nodes.
+  const ResultField result = read_result_vtu(folder / "run" / "result.vtu");
+  Eigen::MatrixXd design(result.points.size(), 4);
+  Eigen::MatrixXd rhs(result.points.size(), 3);
+  for (std::size_t n = 0; n < result.points.size(); ++n) {
+    design.row(static_cast<Index>(n)) << result.points[n].transpose(), 1.0;
+    rhs.row(static_cast<Index>(n)) = result.displacement[n].transpose();
+  }
+  const Eigen::MatrixXd fit = design.colPivHouseholderQr().solve(rhs);  // rows: A^T, then b^T
+  const Mat3 A = fit.topRows(3).transpose();
+  const Vec3 b = fit.row(3).transpose();
+  EXPECT_LT((design * fit - rhs).cwiseAbs().maxCoeff(), 1e-8) << "the run is not homogeneous";
+
+  const auto voxel = [](std::int64_t v) {
+    return Vec3(-1e-3 + 0.6e-3 * static_cast<double>(v % 24), -1e-3 + 0.6e-3 * static_cast<double>((v / 24) % 24),
+                -1e-3 + 0.6e-3 * static_cast<double>(v / 576));
+  };
+  const auto inside = [](const Vec3& X) { return (X.array() > 1e-9).all() && (X.array() < 0.01 - 1e-9).all(); };
+
+  for (const std::string direction : {"forward", "resampling"}) {
+    SCOPED_TRACE(direction);
+    const fs::path file = folder / (direction + ".nrrd");
+    const auto made = test::run_mtled({"field", (folder / "run").string(), "--like", grid.string(), "-o", file.string(),
+                                       "--frame", "LPS", "--direction", direction});
+    ASSERT_EQ(made.exit_code, 0) << made.output;
+    const std::vector<Vec3> field = read_field(file);
+    ASSERT_EQ(field.size(), 24u * 24u * 24u);
+    int checked = 0;
+    for (std::int64_t v = 0; v < 24 * 24 * 24; ++v) {
+      const Vec3 x = voxel(v), d = field[static_cast<std::size_t>(v)];
+      // forward: X = x holds u(X); resampling: x is a point of the moved cube, X = x + d its reference point.
+      const Vec3 X = direction == "forward" ? x : Vec3((Mat3::Identity() + A).inverse() * (x - b));
+      if ((X.array().abs() < 1e-7).any() || ((X.array() - 0.01).abs() < 1e-7).any()) continue;  // on a face
+      if (!inside(X)) {
+        EXPECT_EQ(d, Vec3::Zero()) << "voxel " << v;
+        continue;
+      }
+      ++checked;
+      const Vec3 expected = direction == "forward" ? Vec3(A * X + b) : Vec3(X - x);
+      ASSERT_LT((d - expected).norm(), 1e-6) << "voxel " << v;
+    }
+    EXPECT_GT(checked, 4000);
+  }
+
+  // The cube's Gmsh mesh records no patient frame: the command says how to give one.
+  const auto frameless = test::run_mtled(
+      {"field", (folder / "run").string(), "--like", grid.string(), "-o", (folder / "no.nrrd").string()});
+  EXPECT_EQ(frameless.exit_code, 2) << frameless.output;
+  EXPECT_NE(frameless.output.find("--frame LPS"), std::string::npos) << frameless.output;
+  EXPECT_FALSE(fs::exists(folder / "no.nrrd"));
+}
+
+}  // namespace
+}  // namespace mtled
