@@ -40,7 +40,7 @@ void rasterize(const VoxelGrid& grid, const Mat3& to_index, const std::array<Vec
         const Vec3 b = to_barycentric * (grid.centre(i, j, k) - x[0]);
         const double b0 = 1.0 - b.sum();
         if (b0 >= kOnFace && b.minCoeff() >= kOnFace)
-          visit(i + grid.size[0] * (j + grid.size[1] * k), std::array<double, 4>{b0, b[0], b[1], b[2]});
+          visit(grid.index(i, j, k), std::array<double, 4>{b0, b[0], b[1], b[2]});
       }
 }
 
@@ -55,14 +55,18 @@ void forward(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& tr
   for (const auto& tet : body.tets)
     rasterize(grid, to_index, vertices(body.nodes, tet),
               [&](std::int64_t v, const std::array<double, 4>&) { inside[static_cast<std::size_t>(v)] = 1; });
+  std::int64_t count = 0;
+  // Slices in parallel (MlsTransfer is thread-safe), handed out as they finish: the body fills them unevenly.
+#pragma omp parallel for schedule(dynamic) reduction(+ : count)
   for (std::int64_t k = 0; k < grid.size[2]; ++k)
     for (std::int64_t j = 0; j < grid.size[1]; ++j)
       for (std::int64_t i = 0; i < grid.size[0]; ++i) {
-        const auto v = static_cast<std::size_t>(i + grid.size[0] * (j + grid.size[1] * k));
+        const auto v = static_cast<std::size_t>(grid.index(i, j, k));
         if (!inside[v]) continue;
-        ++out.inside;
+        ++count;
         out.values[v] = transfer.at(grid.centre(i, j, k), body.displacement);
       }
+  out.inside = count;
 }
 
 void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, double tolerance,
@@ -88,13 +92,16 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
       }
     });
   }
+  std::int64_t inside = 0, overlapping = 0, not_converged = 0;
+  double largest = 0.0;
+#pragma omp parallel for schedule(dynamic) reduction(+ : inside, overlapping, not_converged) reduction(max : largest)
   for (std::int64_t k = 0; k < grid.size[2]; ++k)
     for (std::int64_t j = 0; j < grid.size[1]; ++j)
       for (std::int64_t i = 0; i < grid.size[0]; ++i) {
-        const auto v = static_cast<std::size_t>(i + grid.size[0] * (j + grid.size[1] * k));
+        const auto v = static_cast<std::size_t>(grid.index(i, j, k));
         if (found[v] == kNone) continue;
-        ++out.inside;
-        out.overlapping += folded[v];
+        ++inside;
+        overlapping += folded[v];
         // Newton's method with the tet's deformation gradient as the Jacobian of X + u(X).
         const auto& tet = body.tets[static_cast<std::size_t>(found[v])];
         const auto reference = vertices(body.nodes, tet), now = vertices(moved, tet);
@@ -121,10 +128,14 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
           X = next;
           r = r_next;
         }
-        out.not_converged += r.norm() > tolerance;
-        out.largest_residual = std::max(out.largest_residual, r.norm());
+        not_converged += r.norm() > tolerance;
+        largest = std::max(largest, r.norm());
         out.values[v] = X - x;
       }
+  out.inside = inside;
+  out.overlapping = overlapping;
+  out.not_converged = not_converged;
+  out.largest_residual = largest;
 }
 
 }  // namespace

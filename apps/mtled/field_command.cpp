@@ -63,7 +63,7 @@ int field_command(const FieldOptions& options, const std::vector<fs::path>& plug
       options.direction == "forward" ? FieldDirection::forward : FieldDirection::resampling, catalog);
   for (Vec3& v : field.values) v = to_result * v;  // the flip is its own inverse
   fs::create_directories(options.output.parent_path().empty() ? fs::path(".") : options.output.parent_path());
-  write_nrrd_vectors(options.output, {image.size, image.axes, image.origin, image.space}, field.values);
+  write_nrrd_vectors(options.output, {image.size, image.axes, image.origin}, image.space, field.values);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   log().info("{} displacement field on {}x{}x{} voxels of {}: {} inside the body, written to {} ({:.2f} s)",
              options.direction, image.size[0], image.size[1], image.size[2], options.like.string(), field.inside,

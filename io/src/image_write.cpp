@@ -31,18 +31,18 @@ std::string gzip(const std::string& bytes) {
   return out;
 }
 
-void write_nrrd_vectors(const fs::path& file, const ImagePlacement& placement, std::span<const Vec3> vectors) {
+void write_nrrd_vectors(const fs::path& file, const VoxelGrid& grid, const std::string& space,
+                        std::span<const Vec3> vectors) {
   static_assert(std::endian::native == std::endian::little, "the NRRD header says little endian");
   const auto vector = [](const Vec3& v) { return fmt::format("({:.17g},{:.17g},{:.17g})", v[0], v[1], v[2]); };
-  const Mat3 axes_mm = 1e3 * placement.axes;
+  const Mat3 axes_mm = 1e3 * grid.axes;
   std::string header = fmt::format(
       "NRRD0004\n# Complete NRRD file format specification at:\n# http://teem.sourceforge.net/nrrd/format.html\n"
       "type: float\ndimension: 4\nspace: {}\nsizes: 3 {} {} {}\nspace directions: none {} {} {}\n"
       "kinds: vector domain domain domain\nendian: little\nencoding: gzip\nspace origin: {}\nspace units: \"mm\" "
       "\"mm\" \"mm\"\n\n",
-      placement.space == "RAS" ? "right-anterior-superior" : "left-posterior-superior", placement.size[0],
-      placement.size[1], placement.size[2], vector(axes_mm.col(0)), vector(axes_mm.col(1)), vector(axes_mm.col(2)),
-      vector(1e3 * placement.origin));
+      space == "RAS" ? "right-anterior-superior" : "left-posterior-superior", grid.size[0], grid.size[1], grid.size[2],
+      vector(axes_mm.col(0)), vector(axes_mm.col(1)), vector(axes_mm.col(2)), vector(1e3 * grid.origin));
   std::vector<float> values;
   values.reserve(3 * vectors.size());
   for (const Vec3& v : vectors)

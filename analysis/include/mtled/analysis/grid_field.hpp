@@ -10,23 +10,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "mtled/io/image_write.hpp"  // VoxelGrid
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/types.hpp"
 
 namespace mtled {
-
-// A regular grid placed in space: the centre of voxel (i, j, k) is origin + axes (i, j, k)^T (metres), the index i
-// fastest in storage.
-struct VoxelGrid {
-  std::array<std::int64_t, 3> size{0, 0, 0};
-  Mat3 axes = Mat3::Identity();
-  Vec3 origin = Vec3::Zero();
-
-  std::int64_t count() const { return size[0] * size[1] * size[2]; }
-  Vec3 centre(std::int64_t i, std::int64_t j, std::int64_t k) const {
-    return origin + axes * Vec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k));
-  }
-};
 
 enum class FieldDirection { forward, resampling };
 
