@@ -148,7 +148,7 @@ std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, dou
            "(/needle/driven \"shaft_surface\")";
   // Measured on the brain phantom (docs/stability.md): a cloud refined along the path folds earlier, not later, and a
   // slower ramp only delays it; the needle's drag shears the sleeve beside the shaft past what a cloud can follow.
-  if (radial < 0.02)
+  if (radial < kBesideTheNeedle)
     return fmt::format(
         "the needle's drag has sheared the tissue beside its shaft past what the cloud can follow; "
         "refining the cloud along the path makes it fold earlier, not later (docs/stability.md){}. {}, "

@@ -28,6 +28,9 @@ struct FoldAdvice {
   bool drag_limited = false;   // the kinematic needle's drag is limited (/needle/drag_limit)
 };
 
+// A fold this close to the needle's axis (m) is the needle's drag's doing; farther out, a driver's.
+constexpr double kBesideTheNeedle = 0.02;
+
 // What the scene may do about a fold (a tet turned over, or J <= 0 at an integration point): `needle` the needle's
 // state, if one is in (null otherwise); `radial` the fold's distance from its axis; `boundary` the constraint set (not
 // the needle's) that holds a vertex of the folded tet, if any.

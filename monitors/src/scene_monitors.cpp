@@ -36,7 +36,7 @@ FoldAdvice fold_advice(const Scene& scene) {
 std::string fold_advice_at(const Scene& scene, const NeedleStatus& needle, const Vec3& position) {
   const Vec3 x = position - needle.entry;
   const double axial = needle.direction.dot(x), radial = (x - axial * needle.direction).norm();
-  if (needle.depth <= 0.0 || radial >= 0.02) return "";
+  if (needle.depth <= 0.0 || radial >= kBesideTheNeedle) return "";
   return fmt::format(
       "; at a needle depth of {:.1f} mm, {:.1f} mm from the needle's axis and {:.1f} mm under its "
       "entry: {}",
