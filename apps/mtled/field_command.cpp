@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <fstream>
 
 #include "commands.hpp"
 #include "mtled/analysis/grid_field.hpp"
@@ -10,6 +11,7 @@
 #include "mtled/errors.hpp"
 #include "mtled/io/image_write.hpp"
 #include "mtled/io/label_image.hpp"
+#include "mtled/json.hpp"
 #include "mtled/log.hpp"
 
 namespace fs = std::filesystem;
@@ -21,21 +23,35 @@ namespace {
 // LPS and RAS differ by the signs of x and y.
 const Mat3 kFlip = Vec3(-1.0, -1.0, 1.0).asDiagonal();
 
+// The frame the run's mesh recorded: result.vtu's SPACE tag (RAS), else summary.json's mesh.coordinate_system.
+std::string recorded_frame(const ResultField& result, const fs::path& run) {
+  if (!result.coordinate_system.empty()) return result.coordinate_system;
+  std::error_code ec;
+  if (!fs::is_directory(run, ec)) return "";
+  std::ifstream in(run / "summary.json");
+  if (!in) return "";
+  try {
+    return json::parse(in).value("/mesh/coordinate_system"_json_pointer, std::string());
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
 std::string result_frame(const ResultField& result, const FieldOptions& options, const fs::path& file) {
+  const std::string recorded = recorded_frame(result, options.run);
   if (!options.frame.empty()) {
     if (options.frame != "LPS" && options.frame != "RAS")
       throw InputError("--frame", fmt::format("\"{}\": LPS or RAS", options.frame));
-    if (!result.coordinate_system.empty() && result.coordinate_system != options.frame)
-      throw InputError("--frame", fmt::format("{} records its frame, {}; leave --frame out", file.string(),
-                                              result.coordinate_system));
+    if (!recorded.empty() && recorded != options.frame)
+      throw InputError("--frame", fmt::format("{} records its frame, {}; leave --frame out", file.string(), recorded));
     return options.frame;
   }
-  if (result.coordinate_system.empty())
+  if (recorded.empty())
     throw InputError(file.string(),
                      "the run's mesh records no patient frame (LPS or RAS), so where its points lie in the image is "
                      "not known: mesh the image itself (a label_map mesh source records it), or say the frame the "
                      "mesh's coordinates are in with --frame LPS or --frame RAS");
-  return result.coordinate_system;
+  return recorded;
 }
 
 }  // namespace

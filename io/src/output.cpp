@@ -208,17 +208,17 @@ void write_vtu(std::ostream& out, const TetMesh& mesh, std::span<const double> d
                      std::endian::native == std::endian::little ? "LittleEndian" : "BigEndian",
                      binary ? " compressor=\"vtkZLibDataCompressor\"" : "")
       << "<UnstructuredGrid>\n";
-  // A mesh that records its frame keeps it (Slicer reads an untagged file as LPS, its default; mtled field needs to
-  // know a frame was recorded), as Slicer writes it: a string array of the characters and a 0. The length unit is
-  // tagged the same way.
+  // A mesh from 3D Slicer tagged RAS keeps its tag (Slicer reads an untagged file as LPS, its default; meshio reads
+  // no file with a string field, so LPS stays untagged: summary.json records it), as Slicer writes it: a string
+  // array of the characters and a 0. The length unit is tagged the same way.
   const auto string_field = [&](std::string_view name, std::string_view text) {
     out << fmt::format("<Array type=\"String\" Name=\"{}\" NumberOfTuples=\"1\" format=\"ascii\">", name);
     for (const char c : text) out << static_cast<int>(c) << ' ';
     out << "0</Array>\n";
   };
-  if (!mesh.coordinate_system.empty() || millimetres) {
+  if (mesh.coordinate_system == "RAS" || millimetres) {
     out << "<FieldData>\n";
-    if (!mesh.coordinate_system.empty()) string_field("SPACE", mesh.coordinate_system);
+    if (mesh.coordinate_system == "RAS") string_field("SPACE", "RAS");
     if (millimetres) string_field("LENGTH_UNIT", "mm");
     out << "</FieldData>\n";
   }

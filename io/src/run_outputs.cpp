@@ -216,6 +216,7 @@ void RunSummary::record_simulation(const Simulation& simulation, double solve_ti
   const MeshQuality quality = mesh_quality(model.mesh());
   mesh["min_dihedral_angle_deg"] = quality.min_dihedral_angle_deg;
   mesh["min_radius_ratio"] = quality.min_radius_ratio;
+  if (!model.mesh().coordinate_system.empty()) mesh["coordinate_system"] = model.mesh().coordinate_system;
   summary_["mesh"] = mesh;
   summary_["backend"] = simulation.backend();  // with what it counted over the run
   summary_["steps"] = simulation.step();

@@ -89,6 +89,27 @@ TEST(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
     EXPECT_GT(checked, 4000);
   }
 
+  // A mesh made from the label map records its frame (summary.json): no --frame needed.
+  json labelled =
+      json::parse(test::read_text(fs::path(MTLED_TEST_SOURCE_DIR) / "share/scenes/uniaxial_cube_ogden.json"));
+  labelled["mesh"] = {{"type", "label_map"}, {"path", grid.string()}, {"target_nodes", 400}};
+  labelled["boundaries"] = {
+      {{"type", "fixed"},
+       {"name", "bottom"},
+       {"nodes", {{"box", {{"min", {-1, -1, -1}}, {"max", {1, 1, 0.0028}}}}, {"surface_only", true}}}},
+      {{"type", "prescribed_displacement"},
+       {"name", "top"},
+       {"nodes", {{"box", {{"min", {-1, -1, 0.009}}, {"max", {1, 1, 1}}}}, {"surface_only", true}}},
+       {"displacement", {0, 0, -0.0005}}}};
+  test::write_text(folder / "labelled.json", labelled.dump(2));
+  const auto labelled_run = test::run_mtled(
+      {"run", (folder / "labelled.json").string(), "-o", (folder / "labelled").string(), "--no-progress"});
+  ASSERT_EQ(labelled_run.exit_code, 0) << labelled_run.output;
+  EXPECT_EQ(test::read_json(folder / "labelled" / "summary.json")["mesh"]["coordinate_system"], "LPS");
+  const auto framed = test::run_mtled(
+      {"field", (folder / "labelled").string(), "--like", grid.string(), "-o", (folder / "labelled.nrrd").string()});
+  EXPECT_EQ(framed.exit_code, 0) << framed.output;
+
   // The cube's Gmsh mesh records no patient frame: the command says how to give one.
   const auto frameless = test::run_mtled(
       {"field", (folder / "run").string(), "--like", grid.string(), "-o", (folder / "no.nrrd").string()});
