@@ -6,8 +6,9 @@
 #include <fstream>
 
 #include "mtled/errors.hpp"
-#include "mtled/json.hpp"
 #include "mtled/io/vtk_grid.hpp"
+#include "mtled/json.hpp"
+#include "study_support.hpp"
 
 namespace fs = std::filesystem;
 
@@ -15,19 +16,12 @@ namespace mtled {
 
 fs::path result_file_of(const fs::path& run) {
   std::error_code ec;
-  if (!fs::exists(run, ec))
-    throw InputError(run.string(), "no such run folder or result file");
+  if (!fs::exists(run, ec)) throw InputError(run.string(), "no such run folder or result file");
   if (!fs::is_directory(run, ec)) return run;
   const fs::path file = run / "result.vtu";
   if (fs::exists(file, ec)) return file;
-  std::string status;
-  if (std::ifstream in(run / "summary.json"); in) {
-    try {
-      status = json::parse(in).value("status", "");
-    } catch (const std::exception&) {
-      status.clear();
-    }
-  }
+  const json summary = study::read_json_file(run / "summary.json");
+  const std::string status = summary.is_object() ? summary.value("status", "") : "";
   throw InputError(file.string(), status.empty() || status == "ok"
                                       ? "missing: not an mtled run folder, or its run did not finish"
                                       : fmt::format("missing: the run's summary.json says status \"{}\", so it wrote "
@@ -52,10 +46,16 @@ ResultField read_result_vtu(const fs::path& file) {
   ResultField result;
   for (const Vec3& p : grid.points) result.points.push_back(p * to_metres);
   result.tets = grid.tets;
+  // The frame: the file's SPACE tag (RAS), else what the run's summary.json beside it recorded of its mesh.
   result.coordinate_system = grid.coordinate_system;
+  if (result.coordinate_system.empty()) {
+    const json summary = study::read_json_file(file.parent_path() / "summary.json");
+    if (summary.is_object())
+      result.coordinate_system = summary.value("/mesh/coordinate_system"_json_pointer, std::string());
+  }
   for (std::size_t i = 0; i < grid.points.size(); ++i)
-    result.displacement.push_back(
-        to_metres * Vec3{displacement->values[3 * i], displacement->values[3 * i + 1], displacement->values[3 * i + 2]});
+    result.displacement.push_back(to_metres * Vec3{displacement->values[3 * i], displacement->values[3 * i + 1],
+                                                   displacement->values[3 * i + 2]});
   return result;
 }
 

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <fstream>
 
 #include "commands.hpp"
 #include "mtled/analysis/grid_field.hpp"
@@ -11,7 +10,6 @@
 #include "mtled/errors.hpp"
 #include "mtled/io/image_write.hpp"
 #include "mtled/io/label_image.hpp"
-#include "mtled/json.hpp"
 #include "mtled/log.hpp"
 
 namespace fs = std::filesystem;
@@ -23,22 +21,8 @@ namespace {
 // LPS and RAS differ by the signs of x and y.
 const Mat3 kFlip = Vec3(-1.0, -1.0, 1.0).asDiagonal();
 
-// The frame the run's mesh recorded: result.vtu's SPACE tag (RAS), else summary.json's mesh.coordinate_system.
-std::string recorded_frame(const ResultField& result, const fs::path& run) {
-  if (!result.coordinate_system.empty()) return result.coordinate_system;
-  std::error_code ec;
-  if (!fs::is_directory(run, ec)) return "";
-  std::ifstream in(run / "summary.json");
-  if (!in) return "";
-  try {
-    return json::parse(in).value("/mesh/coordinate_system"_json_pointer, std::string());
-  } catch (const std::exception&) {
-    return "";
-  }
-}
-
 std::string result_frame(const ResultField& result, const FieldOptions& options, const fs::path& file) {
-  const std::string recorded = recorded_frame(result, options.run);
+  const std::string& recorded = result.coordinate_system;
   if (!options.frame.empty()) {
     if (options.frame != "LPS" && options.frame != "RAS")
       throw InputError("--frame", fmt::format("\"{}\": LPS or RAS", options.frame));

@@ -18,7 +18,7 @@ struct ResultField {
   std::vector<Vec3> points;
   std::vector<Vec3> displacement;
   std::vector<std::array<Index, 4>> tets;  // the background tets
-  std::string coordinate_system;           // "LPS" or "RAS" when the mesh recorded its frame, else empty
+  std::string coordinate_system;  // "LPS" or "RAS" when the mesh recorded its frame (tag or summary.json), else empty
 };
 // InputError naming the file (and line) when it is not an mtled result.
 ResultField read_result_vtu(const std::filesystem::path& file);
