@@ -51,7 +51,7 @@ std::array<Vec3, 4> vertices(const std::vector<Vec3>& points, const std::array<I
 
 void forward(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, GridField& out) {
   const Mat3 to_index = grid.axes.inverse();
-  std::vector<char> inside(static_cast<std::size_t>(grid.count()), 0);
+  std::vector<char>& inside = out.inside_body;
   for (const auto& tet : body.tets)
     rasterize(grid, to_index, vertices(body.nodes, tet),
               [&](std::int64_t v, const std::array<double, 4>&) { inside[static_cast<std::size_t>(v)] = 1; });
@@ -101,6 +101,7 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
         const auto v = static_cast<std::size_t>(grid.index(i, j, k));
         if (found[v] == kNone) continue;
         ++inside;
+        out.inside_body[v] = 1;
         overlapping += folded[v];
         // Newton's method with the tet's deformation gradient as the Jacobian of X + u(X).
         const auto& tet = body.tets[static_cast<std::size_t>(found[v])];
@@ -144,12 +145,70 @@ GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, Fie
                                PluginCatalog& catalog, double tolerance) {
   GridField out;
   out.values.assign(static_cast<std::size_t>(grid.count()), Vec3::Zero());
+  out.inside_body.assign(out.values.size(), 0);
   const MlsTransfer transfer(body.nodes, catalog);
   if (direction == FieldDirection::forward)
     forward(body, grid, transfer, out);
   else
     resampling(body, grid, transfer, tolerance, out);
   return out;
+}
+
+double extend_outside(const VoxelGrid& grid, double decay, GridField& field) {
+  const auto& n = grid.size;
+  const std::int64_t count = grid.count();
+  constexpr std::int64_t kNone = -1;
+  std::vector<std::int64_t> nearest(static_cast<std::size_t>(count), kNone);
+  std::vector<double> distance2(nearest.size(), std::numeric_limits<double>::infinity());
+  for (std::int64_t v = 0; v < count; ++v)
+    if (field.inside_body[static_cast<std::size_t>(v)]) {
+      nearest[static_cast<std::size_t>(v)] = v;
+      distance2[static_cast<std::size_t>(v)] = 0.0;
+    }
+  const auto ijk = [&](std::int64_t v) {
+    return Vec3(static_cast<double>(v % n[0]), static_cast<double>((v / n[0]) % n[1]),
+                static_cast<double>(v / (n[0] * n[1])));
+  };
+  // The 13 neighbours before a voxel in storage order; the sweep back uses their opposites.
+  std::vector<std::array<std::int64_t, 3>> before;
+  for (std::int64_t dk = -1; dk <= 0; ++dk)
+    for (std::int64_t dj = -1; dj <= 1; ++dj)
+      for (std::int64_t di = -1; di <= 1; ++di)
+        if (dk < 0 || (dk == 0 && (dj < 0 || (dj == 0 && di < 0)))) before.push_back({di, dj, dk});
+  const auto visit = [&](std::int64_t i, std::int64_t j, std::int64_t k, int sign) {
+    const auto v = static_cast<std::size_t>(grid.index(i, j, k));
+    if (distance2[v] == 0.0) return;
+    for (const auto& d : before) {
+      const std::int64_t a = i + sign * d[0], b = j + sign * d[1], c = k + sign * d[2];
+      if (a < 0 || b < 0 || c < 0 || a >= n[0] || b >= n[1] || c >= n[2]) continue;
+      const std::int64_t feature = nearest[static_cast<std::size_t>(grid.index(a, b, c))];
+      if (feature == kNone) continue;
+      const double d2 = (grid.axes * (Vec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)) -
+                                      ijk(feature)))
+                            .squaredNorm();
+      if (d2 < distance2[v]) {
+        distance2[v] = d2;
+        nearest[v] = feature;
+      }
+    }
+  };
+  for (std::int64_t k = 0; k < n[2]; ++k)
+    for (std::int64_t j = 0; j < n[1]; ++j)
+      for (std::int64_t i = 0; i < n[0]; ++i) visit(i, j, k, 1);
+  for (std::int64_t k = n[2] - 1; k >= 0; --k)
+    for (std::int64_t j = n[1] - 1; j >= 0; --j)
+      for (std::int64_t i = n[0] - 1; i >= 0; --i) visit(i, j, k, -1);
+  double largest = 0.0;
+  for (std::int64_t v = 0; v < count; ++v) {
+    const auto s = static_cast<std::size_t>(v);
+    if (field.inside_body[s] || nearest[s] == kNone) continue;
+    const double t = std::sqrt(distance2[s]) / decay;
+    if (!(t < 1.0)) continue;
+    const Vec3& surface = field.values[static_cast<std::size_t>(nearest[s])];
+    largest = std::max(largest, surface.norm());
+    field.values[s] = (1.0 - t * t * (3.0 - 2.0 * t)) * surface;
+  }
+  return largest;
 }
 
 }  // namespace mtled

@@ -29,9 +29,19 @@ struct MeshOptions {
 struct FieldOptions {
   std::filesystem::path run;     // run folder or result .vtu
   std::filesystem::path like;    // an image whose grid the field is sampled on (NRRD, NIfTI)
-  std::filesystem::path output;  // .nrrd
+  std::filesystem::path output;  // .nrrd, .nii or .nii.gz
   std::string direction = "resampling";  // or "forward"
   std::string frame;             // "LPS" or "RAS": the result's frame when its mesh recorded none
+  double decay_mm = 10.0;        // outside the body the field fades to zero over this distance; 0: zero outside
+};
+
+struct WarpOptions {
+  std::filesystem::path image;   // the reference image (NRRD, NIfTI), scalar
+  std::filesystem::path run;     // run folder or result .vtu
+  std::filesystem::path output;  // .nrrd, .nii or .nii.gz
+  std::string interpolation;     // "linear" or "nearest"; empty: nearest for whole-number types, else linear
+  std::string frame;             // as FieldOptions
+  double decay_mm = 10.0;        // as FieldOptions
 };
 
 struct CompareOptions {
@@ -79,6 +89,7 @@ int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as
 int print_schema(const std::vector<std::filesystem::path>& plugin_paths);
 int compare_command(const CompareOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
 int field_command(const FieldOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
+int warp_command(const WarpOptions& options, const std::vector<std::filesystem::path>& plugin_paths);
 int study_command(const StudyOptions& options);
 int fit_command(const FitOptions& options);
 // Replaces the process by the conformance runner (its exit code: 0 when every suite passed).

@@ -26,12 +26,13 @@ struct Commands {
   std::string describe;
   mtled::app::CompareOptions compare;
   mtled::app::FieldOptions field;
+  mtled::app::WarpOptions warp;
   mtled::app::StudyOptions study;
   mtled::app::FitOptions fit;
   mtled::app::ConformanceOptions conformance;
   CLI::App *run_cmd = nullptr, *validate_cmd = nullptr, *plugins_cmd = nullptr, *schema_cmd = nullptr,
            *compare_cmd = nullptr, *study_cmd = nullptr, *conformance_cmd = nullptr, *mesh_cmd = nullptr,
-           *fit_cmd = nullptr, *field_cmd = nullptr;
+           *fit_cmd = nullptr, *field_cmd = nullptr, *warp_cmd = nullptr;
 };
 
 void add_global_options(CLI::App& cli, Commands& c) {
@@ -90,16 +91,35 @@ void add_analysis_commands(CLI::App& cli, Commands& c) {
   c.compare_cmd->add_option("--bins", c.compare.bins, "histogram bins (default 41)")->check(CLI::PositiveNumber);
 
   c.field_cmd = cli.add_subcommand(
-      "field", "a run's displacement on an image's grid, as a displacement-field NRRD for 3D Slicer and ITK "
-               "(docs/label-maps.md)");
+      "field", "a run's displacement on an image's grid, as a displacement-field image (NRRD, NIfTI) for 3D Slicer "
+               "and ITK (docs/label-maps.md)");
   c.field_cmd->add_option("run", c.field.run, "run folder (or result .vtu)")->required();
   c.field_cmd->add_option("--like", c.field.like, "image whose grid the field is sampled on (NRRD, NIfTI)")->required();
-  c.field_cmd->add_option("-o,--output", c.field.output, "the field (.nrrd)")->required();
+  c.field_cmd->add_option("-o,--output", c.field.output, "the field (.nrrd, or .nii / .nii.gz: RAS, intent DISPVECT)")
+      ->required();
   c.field_cmd->add_option("--direction", c.field.direction,
                           "resampling (default: at each voxel of the deformed body, the step back to its reference "
                           "point, what Slicer and ITK resample with) or forward (at each voxel of the reference body, "
                           "where its material goes)");
   c.field_cmd->add_option("--frame", c.field.frame, "LPS or RAS: the frame of a mesh that records none");
+  c.field_cmd->add_option("--decay", c.field.decay_mm,
+                          "outside the body, the nearest surface value fading to zero over this many mm (default 10; "
+                          "0: zero outside)")
+      ->check(CLI::NonNegativeNumber);
+
+  c.warp_cmd = cli.add_subcommand(
+      "warp", "an image (the pre-operative MRI, the label map) resampled into a run's deformed state (docs/label-maps.md)");
+  c.warp_cmd->add_option("image", c.warp.image, "scalar image in the scene's frame (NRRD, NIfTI)")->required();
+  c.warp_cmd->add_option("run", c.warp.run, "run folder (or result .vtu)")->required();
+  c.warp_cmd->add_option("-o,--output", c.warp.output, "the warped image (.nrrd, .nii or .nii.gz)")->required();
+  c.warp_cmd->add_option("--interpolation", c.warp.interpolation,
+                         "linear (intensities) or nearest (labels); default: nearest for whole-number voxel types, "
+                         "else linear");
+  c.warp_cmd->add_option("--frame", c.warp.frame, "LPS or RAS: the frame of a mesh that records none");
+  c.warp_cmd->add_option("--decay", c.warp.decay_mm,
+                         "outside the body, the displacement fades to zero over this many mm (default 10; 0: the "
+                         "image outside the deformed body is not moved)")
+      ->check(CLI::NonNegativeNumber);
 
   c.study_cmd = cli.add_subcommand("study", "run a sweep of scene settings against a reference (docs/studies.md)");
   c.study_cmd->add_option("study", c.study.study, "study file (JSON)")->required();
@@ -142,6 +162,7 @@ int dispatch(Commands& c) {
   if (*c.schema_cmd) return app::print_schema(c.plugin_paths);
   if (*c.compare_cmd) return app::compare_command(c.compare, c.plugin_paths);
   if (*c.field_cmd) return app::field_command(c.field, c.plugin_paths);
+  if (*c.warp_cmd) return app::warp_command(c.warp, c.plugin_paths);
   if (*c.study_cmd) return app::study_command(c.study);
   if (*c.fit_cmd) return app::fit_command(c.fit);
   if (*c.conformance_cmd) return app::conformance_command(c.conformance, c.plugin_paths);

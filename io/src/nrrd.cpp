@@ -1,23 +1,22 @@
-// NRRD (Teem's "nearly raw raster data", the format 3D Slicer saves volumes and segmentations in): a text header
-// of "field: value" lines and "key:=value" pairs up to a blank line, then the voxels. Read: one 3-D scalar
-// volume with an attached header, raw or gzip encoded, placed by "space" (or "space dimension"), "space
-// directions" and "space origin" (else "spacings"), with Slicer's SegmentN_Name / SegmentN_LabelValue pairs.
+// NRRD (Teem's "nearly raw raster data", the format 3D Slicer saves volumes, segmentations and grid transforms in): a
+// text header of "field: value" lines and "key:=value" pairs up to a blank line, then the voxels. Read: one 3-D
+// volume of scalars, or of 3-vectors ("kinds: vector domain domain domain", a displacement field), with an attached
+// header, raw or gzip encoded, placed by "space", "space directions" and "space origin" (else "spacings").
 #include <fmt/format.h>
 
 #include <bit>
 #include <cmath>
 #include <sstream>
 
-#include "label_voxels.hpp"
+#include "image_voxels.hpp"
 #include "mtled/errors.hpp"
-#include "mtled/io/label_image.hpp"
+#include "mtled/io/image.hpp"
 
 namespace mtled {
 
 namespace {
 
-using label_voxels::Kind;
-using label_voxels::StoredType;
+using Kind = VoxelKind;
 
 struct NrrdHeader {
   std::map<std::string, std::string> fields;     // lower-case field name -> value
@@ -63,12 +62,12 @@ NrrdHeader read_header(const std::string& bytes, const std::string& source) {
 const std::string& field(const NrrdHeader& header, const std::string& name, const std::string& source) {
   const auto it = header.fields.find(name);
   if (it == header.fields.end())
-    throw InputError(source, fmt::format("the NRRD header has no \"{}\" field, which a label map needs", name));
+    throw InputError(source, fmt::format("the NRRD header has no \"{}\" field, which an image needs", name));
   return it->second;
 }
 
-StoredType stored_type(const std::string& name, const std::string& source) {
-  static const std::map<std::string, StoredType> types = {
+VoxelType stored_type(const std::string& name, const std::string& source) {
+  static const std::map<std::string, VoxelType> types = {
       {"uchar", {Kind::unsigned_integer, 1}},   {"unsigned char", {Kind::unsigned_integer, 1}},
       {"uint8", {Kind::unsigned_integer, 1}},   {"uint8_t", {Kind::unsigned_integer, 1}},
       {"signed char", {Kind::signed_integer, 1}}, {"int8", {Kind::signed_integer, 1}},
@@ -131,62 +130,68 @@ std::string space_tag(const NrrdHeader& header, const std::string& source) {
                                        "(right-anterior-superior or left-posterior-superior)", space));
 }
 
-void place(LabelImage& image, const NrrdHeader& header, const std::string& source) {
-  const double unit = length_unit(header, source);
+void place(Image& image, const NrrdHeader& header, const std::string& source, double unit) {
+  VoxelGrid& grid = image.grid;
   if (const auto it = header.fields.find("space directions"); it != header.fields.end()) {
     const auto axes = vectors(it->second, source, "space directions");
     if (axes.size() != 3)
-      throw InputError(source, fmt::format("space directions: {} vectors for a 3-D image (one per axis, each "
-                                           "\"(x,y,z)\")", axes.size()));
-    for (int a = 0; a < 3; ++a) image.axes.col(a) = unit * axes[static_cast<std::size_t>(a)];
+      throw InputError(source, fmt::format("space directions: {} vectors for a 3-D image (one per domain axis, each "
+                                           "\"(x,y,z)\"; \"none\" for a vector axis)", axes.size()));
+    for (int a = 0; a < 3; ++a) grid.axes.col(a) = unit * axes[static_cast<std::size_t>(a)];
     if (const auto origin = header.fields.find("space origin"); origin != header.fields.end()) {
       const auto o = vectors(origin->second, source, "space origin");
       if (o.size() != 1) throw InputError(source, "space origin: expected one vector \"(x,y,z)\"");
-      image.origin = unit * o[0];
+      grid.origin = unit * o[0];
     }
   } else if (const auto spacings = header.fields.find("spacings"); spacings != header.fields.end()) {
     std::istringstream in(spacings->second);
-    Vec3 s;
-    if (!(in >> s[0] >> s[1] >> s[2])) throw InputError(source, "spacings: expected three numbers");
-    image.axes = (unit * s).asDiagonal();
+    std::vector<double> numbers;
+    for (std::string word; in >> word;)
+      if (word != "nan" && word != "NaN") numbers.push_back(std::atof(word.c_str()));  // a vector axis has "nan"
+    if (numbers.size() != 3) throw InputError(source, "spacings: expected three numbers (one per domain axis)");
+    grid.axes = (unit * Vec3(numbers[0], numbers[1], numbers[2])).asDiagonal();
   }
   image.space = space_tag(header, source);
-  label_voxels::check_grid(image, "space directions");
+  image_voxels::check_grid(grid, source, "space directions");
 }
 
-// Slicer's segmentation: SegmentN_Name and SegmentN_LabelValue (label N + 1 in files older than Slicer 4.11).
-void read_segments(LabelImage& image, const NrrdHeader& header) {
-  for (int n = 0;; ++n) {
-    const auto name = header.key_values.find(fmt::format("Segment{}_Name", n));
-    if (name == header.key_values.end()) break;
-    const auto value = header.key_values.find(fmt::format("Segment{}_LabelValue", n));
-    const int label = value != header.key_values.end() ? std::atoi(value->second.c_str()) : n + 1;
-    image.segment_names[label] = name->second;
-  }
+// The number of values per voxel: 1 for a 3-D image, 3 for a 4-D one whose first axis is a vector.
+int components(const NrrdHeader& header, const std::string& dimension, std::istringstream& sizes,
+               const std::string& source) {
+  if (dimension == "3") return 1;
+  const auto kinds = header.fields.find("kinds");
+  std::string first_kind;
+  if (kinds != header.fields.end()) std::istringstream(kinds->second) >> first_kind;
+  std::int64_t length = 0;
+  if (dimension != "4" || !(sizes >> length) || length != 3 ||
+      (first_kind != "vector" && first_kind != "3-vector" && first_kind != "covariant-vector"))
+    throw InputError(source, fmt::format("dimension: {}; an image here is one 3-D volume of scalars, or of 3-vectors "
+                                         "(dimension 4, sizes 3 ..., kinds vector domain domain domain). A "
+                                         "segmentation with overlapping segments has a 4th axis of layers: in "
+                                         "Slicer export it as a labelmap volume", dimension));
+  return 3;
 }
 
 }  // namespace
 
-LabelImage parse_nrrd(const std::string& bytes, const std::string& source) {
+Image parse_nrrd(const std::string& bytes, const std::string& source) {
   const NrrdHeader header = read_header(bytes, source);
   if (header.fields.count("data file") != 0)
-    throw InputError(source, "data file: the voxels are in a detached file; save the label map with an attached "
-                             "header (one .nrrd or .seg.nrrd file, Slicer's default)");
+    throw InputError(source, "data file: the voxels are in a detached file; save the image with an attached header "
+                             "(one .nrrd or .seg.nrrd file, Slicer's default)");
   for (const char* skip : {"byte skip", "line skip"})
     if (header.fields.count(skip) != 0 && header.fields.at(skip) != "0")
       throw InputError(source, fmt::format("{}: skipped data before the voxels is not supported", skip));
-  LabelImage image;
+  Image image;
   image.source = source;
-  const std::string dimension = field(header, "dimension", source);
-  if (dimension != "3")
-    throw InputError(source, fmt::format("dimension: {}; a label map is one 3-D volume (a segmentation with "
-                                         "overlapping segments has a 4th axis of layers: in Slicer export it as a "
-                                         "labelmap volume)", dimension));
+  image.key_values = header.key_values;
   std::istringstream sizes(field(header, "sizes", source));
-  if (!(sizes >> image.size[0] >> image.size[1] >> image.size[2]))
-    throw InputError(source, "sizes: expected three whole numbers");
-  place(image, header, source);
-  const StoredType type = stored_type(field(header, "type", source), source);
+  image.components = components(header, field(header, "dimension", source), sizes, source);
+  if (!(sizes >> image.grid.size[0] >> image.grid.size[1] >> image.grid.size[2]))
+    throw InputError(source, "sizes: expected three whole numbers (one per domain axis)");
+  const double unit = length_unit(header, source);
+  place(image, header, source, unit);
+  image.type = stored_type(field(header, "type", source), source);
   const std::string encoding = field(header, "encoding", source);
   std::string gunzipped;
   const char* data = bytes.data() + header.data_offset;
@@ -198,16 +203,17 @@ LabelImage parse_nrrd(const std::string& bytes, const std::string& source) {
   } else if (encoding != "raw") {
     throw InputError(source, fmt::format("encoding: \"{}\" is not supported (raw or gzip; Slicer writes gzip)", encoding));
   }
-  const std::int64_t count = image.size[0] * image.size[1] * image.size[2];
-  const auto needed = static_cast<std::size_t>(count * type.bytes);
+  const std::int64_t count = image.grid.count() * image.components;
+  const auto needed = static_cast<std::size_t>(count * image.type.bytes);
   if (available < needed)
-    throw InputError(source, fmt::format("the voxel data is truncated: {} bytes for {} voxels of {} bytes ({} needed)",
-                                         available, count, type.bytes, needed));
+    throw InputError(source, fmt::format("the voxel data is truncated: {} bytes for {} values of {} bytes ({} needed)",
+                                         available, count, image.type.bytes, needed));
   const auto endian = header.fields.find("endian");
   const bool big = endian != header.fields.end() && endian->second == "big";
-  const bool swap = type.bytes > 1 && big != (std::endian::native == std::endian::big);
-  image.labels = label_voxels::decode(data, count, type, swap, source, "the voxels");
-  read_segments(image, header);
+  const bool swap = image.type.bytes > 1 && big != (std::endian::native == std::endian::big);
+  image.values = image_voxels::decode(data, count, image.type, swap);
+  if (image.components == 3)
+    for (double& v : image.values) v *= unit;  // displacements are lengths in the space's unit
   return image;
 }
 

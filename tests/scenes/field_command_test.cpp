@@ -68,7 +68,7 @@ TEST(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
     SCOPED_TRACE(direction);
     const fs::path file = folder / (direction + ".nrrd");
     const auto made = test::run_mtled({"field", (folder / "run").string(), "--like", grid.string(), "-o", file.string(),
-                                       "--frame", "LPS", "--direction", direction});
+                                       "--frame", "LPS", "--direction", direction, "--decay", "0"});
     ASSERT_EQ(made.exit_code, 0) << made.output;
     const std::vector<Vec3> field = read_field(file);
     ASSERT_EQ(field.size(), 24u * 24u * 24u);

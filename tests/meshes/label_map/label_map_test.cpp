@@ -171,7 +171,7 @@ TEST(LabelMap, BadLabelMapsAreRefusedNamingTheFileAndField) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(nifti.data() + 108, &nan, sizeof nan);
   expect_refused("nan_offset.nii", nifti, "vox_offset");
-  expect_refused("image.png", "not an image", "unknown label-map format");
+  expect_refused("image.png", "not an image", "unknown image format");
   // Labels the scene names that the image lacks, and an image with nothing labelled.
   EXPECT_THROW(mesh_label_map({{"path", good.string()}, {"mesh_size", 1e-3}, {"labels", {7}}}), InputError);
   EXPECT_THROW(mesh_label_map({{"path", good.string()}, {"mesh_size", 1e-3}, {"segments", {"tumor"}}}), InputError);

@@ -5,12 +5,13 @@
 //  - resampling: at each voxel centre x of the deformed body, d(x) = X - x with X + u(X) = x: the displacement a
 //    resampling transform (ITK's, Slicer's) adds to an output point to find where to read the reference image.
 // u is the run's interpolated nodal displacement carried to the point with MLS (MlsTransfer). Inside is decided by
-// the background tets (reference ones for forward, moved ones for resampling); outside the field is zero.
+// the background tets (reference ones for forward, moved ones for resampling). Outside the field is zero, or
+// (extend_outside) the value at the nearest voxel inside fading to zero over a distance the user sets.
 #include <array>
 #include <cstdint>
 #include <vector>
 
-#include "mtled/io/image_write.hpp"  // VoxelGrid
+#include "mtled/io/image.hpp"  // VoxelGrid
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/types.hpp"
 
@@ -20,6 +21,7 @@ enum class FieldDirection { forward, resampling };
 
 struct GridField {
   std::vector<Vec3> values;        // one per voxel (m), zero outside the body
+  std::vector<char> inside_body;   // one per voxel: 1 where the voxel's centre is inside the body
   std::int64_t inside = 0;         // voxels inside the (reference or moved) body
   std::int64_t overlapping = 0;    // resampling: voxels inside more than one moved tet (the body folded there)
   std::int64_t not_converged = 0;  // resampling: voxels whose X + u(X) = x was not solved to the tolerance
@@ -36,5 +38,12 @@ struct BodyState {
 // moved tet's linear map, to `tolerance` (m).
 GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, FieldDirection direction,
                                PluginCatalog& catalog, double tolerance = 1e-9);
+
+// Outside the body, each voxel takes the value of its nearest voxel inside, times s(t) = 1 - 3 t^2 + 2 t^3 of
+// t = distance / `decay` (m): continuous at the surface, smooth, zero from `decay` on. The nearest voxel is found by
+// propagating nearest-voxel labels over the 26 neighbours in one forward and one backward sweep (Danielsson's vector
+// propagation), exact to a fraction of a voxel. x + d(x) stays one-to-one outside while `decay` exceeds 1.5 times
+// the largest value at the surface (the largest slope of s is 1.5). Returns that largest value (m).
+double extend_outside(const VoxelGrid& grid, double decay, GridField& field);
 
 }  // namespace mtled

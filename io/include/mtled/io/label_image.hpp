@@ -1,8 +1,8 @@
 #pragma once
 // A segmented image: one integer label per voxel on a regular grid placed in physical space, as 3D Slicer
-// (Segment Editor: .seg.nrrd, .nrrd), ITK-SNAP and FreeSurfer (.nii, .nii.gz) save label maps. Readers for NRRD
-// (raw and gzip encodings, "space", "space directions", "space origin", Slicer's segment names and label values)
-// and NIfTI-1/2 (sform or qform, .nii and .nii.gz). Every problem is an InputError naming the file and the field.
+// (Segment Editor: .seg.nrrd, .nrrd), ITK-SNAP and FreeSurfer (.nii, .nii.gz) save label maps: an image (image.hpp)
+// of whole scalar values, with Slicer's segment names and label values. Every problem is an InputError naming the
+// file and the field.
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "mtled/io/image.hpp"
 #include "mtled/types.hpp"
 
 namespace mtled {
@@ -36,13 +37,9 @@ struct LabelImage {
   std::map<std::int32_t, std::int64_t> voxel_counts() const;
 };
 
-// Reads .nrrd / .seg.nrrd (attached header) or .nii / .nii.gz, chosen by the file's name. Lengths in the file's
-// unit (millimetres unless it says otherwise) become metres.
+// Reads .nrrd / .seg.nrrd (attached header) or .nii / .nii.gz, chosen by the file's name (read_image).
 LabelImage read_label_image(const std::filesystem::path& file);
-LabelImage parse_nrrd(const std::string& bytes, const std::string& source);
-LabelImage parse_nifti(const std::string& bytes, const std::string& source);
-
-// The file's bytes, gunzipped when `gzip` (a truncated or corrupt stream is an InputError naming `source`).
-std::string gunzip(const std::string& bytes, const std::string& source);
+// The labels of a scalar image of whole numbers that fit 32 bits, else an InputError naming the image's file.
+LabelImage to_label_image(const Image& image);
 
 }  // namespace mtled
