@@ -15,7 +15,8 @@ namespace {
 // Calls visit(voxel, barycentric coordinates of its centre) for each voxel whose centre lies in the tet with vertices
 // x (on a face counts: a voxel on a face shared by two tets is visited by both).
 template <class Visit>
-void rasterize(const VoxelGrid& grid, const Mat3& to_index, const std::array<Vec3, 4>& x, Visit&& visit) {
+void rasterize(const VoxelGrid& grid, const Mat3& to_index, const std::array<Vec3, 4>& x, std::int64_t k_first,
+               std::int64_t k_last, Visit&& visit) {
   Mat3 edges;
   for (int c = 0; c < 3; ++c) edges.col(c) = x[static_cast<std::size_t>(c) + 1] - x[0];
   const double volume = edges.determinant();
@@ -34,7 +35,7 @@ void rasterize(const VoxelGrid& grid, const Mat3& to_index, const std::array<Vec
                                      static_cast<std::int64_t>(std::floor(hi[static_cast<Index>(a)] + 1e-9)));
   }
   constexpr double kOnFace = -1e-12;
-  for (std::int64_t k = first[2]; k <= last[2]; ++k)
+  for (std::int64_t k = std::max(first[2], k_first); k <= std::min(last[2], k_last); ++k)
     for (std::int64_t j = first[1]; j <= last[1]; ++j)
       for (std::int64_t i = first[0]; i <= last[0]; ++i) {
         const Vec3 b = to_barycentric * (grid.centre(i, j, k) - x[0]);
@@ -49,12 +50,40 @@ std::array<Vec3, 4> vertices(const std::vector<Vec3>& points, const std::array<I
           points[static_cast<std::size_t>(tet[2])], points[static_cast<std::size_t>(tet[3])]};
 }
 
-void forward(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, GridField& out) {
+// rasterize() for every tet (vertices at `points`): visit(tet, voxel, barycentric coordinates). The grid is cut into
+// slabs of a few k-planes, done in parallel; within a slab the tets go in order, so a voxel sees the tets in the
+// order a serial loop would, and only one thread writes it.
+template <class Visit>
+void rasterize_all(const VoxelGrid& grid, const std::vector<Vec3>& points,
+                   const std::vector<std::array<Index, 4>>& tets, Visit&& visit) {
   const Mat3 to_index = grid.axes.inverse();
+  constexpr std::int64_t kSlab = 4;
+  const std::int64_t slabs = (grid.size[2] + kSlab - 1) / kSlab;
+  std::vector<std::vector<std::uint32_t>> members(static_cast<std::size_t>(slabs));
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (const Vec3& p : vertices(points, tets[t])) {
+      const double k = to_index.row(2).dot(p - grid.origin);
+      lo = std::min(lo, k);
+      hi = std::max(hi, k);
+    }
+    const auto first = std::max<std::int64_t>(0, static_cast<std::int64_t>(std::ceil(lo - 1e-9)) / kSlab);
+    const auto last = std::min<std::int64_t>(slabs - 1, static_cast<std::int64_t>(std::floor(hi + 1e-9)) / kSlab);
+    for (std::int64_t slab = first; slab <= last; ++slab)
+      members[static_cast<std::size_t>(slab)].push_back(static_cast<std::uint32_t>(t));
+  }
+#pragma omp parallel for schedule(dynamic)
+  for (std::int64_t slab = 0; slab < slabs; ++slab)
+    for (const std::uint32_t t : members[static_cast<std::size_t>(slab)])
+      rasterize(grid, to_index, vertices(points, tets[t]), slab * kSlab, slab * kSlab + kSlab - 1,
+                [&](std::int64_t v, const std::array<double, 4>& b) { visit(t, v, b); });
+}
+
+void forward(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, GridField& out) {
   std::vector<char>& inside = out.inside_body;
-  for (const auto& tet : body.tets)
-    rasterize(grid, to_index, vertices(body.nodes, tet),
-              [&](std::int64_t v, const std::array<double, 4>&) { inside[static_cast<std::size_t>(v)] = 1; });
+  rasterize_all(grid, body.nodes, body.tets, [&](std::uint32_t, std::int64_t v, const std::array<double, 4>&) {
+    inside[static_cast<std::size_t>(v)] = 1;
+  });
   std::int64_t count = 0;
   // Slices in parallel (MlsTransfer is thread-safe), handed out as they finish: the body fills them unevenly.
 #pragma omp parallel for schedule(dynamic) reduction(+ : count)
@@ -71,7 +100,6 @@ void forward(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& tr
 
 void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, double tolerance,
                 GridField& out) {
-  const Mat3 to_index = grid.axes.inverse();
   std::vector<Vec3> moved(body.nodes.size());
   for (std::size_t n = 0; n < moved.size(); ++n) moved[n] = body.nodes[n] + body.displacement[n];
   // Per voxel: the first moved tet found around its centre, and where that tet's linear map takes it back.
@@ -79,60 +107,76 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
   std::vector<Index> found(static_cast<std::size_t>(grid.count()), kNone);
   std::vector<Vec3> start(found.size());
   std::vector<char> folded(found.size(), 0);
-  for (std::size_t t = 0; t < body.tets.size(); ++t) {
+  rasterize_all(grid, moved, body.tets, [&](std::uint32_t t, std::int64_t v, const std::array<double, 4>& b) {
     const auto reference = vertices(body.nodes, body.tets[t]);
-    rasterize(grid, to_index, vertices(moved, body.tets[t]), [&](std::int64_t v, const std::array<double, 4>& b) {
-      const auto s = static_cast<std::size_t>(v);
-      const Vec3 X = b[0] * reference[0] + b[1] * reference[1] + b[2] * reference[2] + b[3] * reference[3];
-      if (found[s] == kNone) {
-        found[s] = static_cast<Index>(t);
-        start[s] = X;
-      } else if ((X - start[s]).norm() > 1e-6 * (reference[1] - reference[0]).norm()) {
-        folded[s] = 1;  // two moved tets hold the point with different reference points: not a shared face
-      }
-    });
-  }
+    const auto s = static_cast<std::size_t>(v);
+    const Vec3 X = b[0] * reference[0] + b[1] * reference[1] + b[2] * reference[2] + b[3] * reference[3];
+    if (found[s] == kNone) {
+      found[s] = static_cast<Index>(t);
+      start[s] = X;
+    } else if ((X - start[s]).norm() > 1e-6 * (reference[1] - reference[0]).norm()) {
+      folded[s] = 1;  // two moved tets hold the point with different reference points: not a shared face
+    }
+  });
   std::int64_t inside = 0, overlapping = 0, not_converged = 0;
   double largest = 0.0;
 #pragma omp parallel for schedule(dynamic) reduction(+ : inside, overlapping, not_converged) reduction(max : largest)
   for (std::int64_t k = 0; k < grid.size[2]; ++k)
-    for (std::int64_t j = 0; j < grid.size[1]; ++j)
+    for (std::int64_t j = 0; j < grid.size[1]; ++j) {
+      // The last voxel solved on this row, to predict the next one from: X + (I + du/dX)^-1 (x - x_last).
+      bool have_last = false;
+      Vec3 last_x, last_X;
+      Mat3 last_jacobian;
       for (std::int64_t i = 0; i < grid.size[0]; ++i) {
         const auto v = static_cast<std::size_t>(grid.index(i, j, k));
-        if (found[v] == kNone) continue;
+        if (found[v] == kNone) {
+          have_last = false;
+          continue;
+        }
         ++inside;
         out.inside_body[v] = 1;
         overlapping += folded[v];
-        // Newton's method with the tet's deformation gradient as the Jacobian of X + u(X).
-        const auto& tet = body.tets[static_cast<std::size_t>(found[v])];
-        const auto reference = vertices(body.nodes, tet), now = vertices(moved, tet);
-        Mat3 dX, dx;
-        for (int c = 0; c < 3; ++c) {
-          dX.col(c) = reference[static_cast<std::size_t>(c) + 1] - reference[0];
-          dx.col(c) = now[static_cast<std::size_t>(c) + 1] - now[0];
-        }
-        const Mat3 step = dX * dx.inverse();  // F^-1 of the tet's linear map
         const Vec3 x = grid.centre(i, j, k);
-        const auto residual = [&](const Vec3& X) { return Vec3(X + transfer.at(X, body.displacement) - x); };
-        Vec3 X = start[v], r = residual(X);
-        // Newton with the tet's deformation gradient as the Jacobian of X + u(X); it stops where a step no longer
-        // lowers the residual (a point the moved tets fold over, or a field too rough for the tet's gradient).
+        Mat3 jacobian;
+        const auto residual = [&](const Vec3& X, Mat3& J) {
+          const Vec3 r = X + transfer.at(X, body.displacement, J) - x;
+          J += Mat3::Identity();
+          return r;
+        };
+        // Newton's method on X + u(X) = x with u's MLS gradient, from the prediction along the row or else the moved
+        // tet's linear map; it stops where a step no longer lowers the residual (a point the moved tets fold over).
+        Vec3 X = have_last ? Vec3(last_X + last_jacobian.partialPivLu().solve(x - last_x)) : start[v];
+        Vec3 r;
+        try {
+          r = residual(X, jacobian);
+        } catch (const std::runtime_error&) {  // a prediction out of the cloud
+          X = start[v];
+          r = residual(X, jacobian);
+        }
         for (int iteration = 0; iteration < 30 && r.norm() > tolerance; ++iteration) {
-          const Vec3 next = X - step * r;
+          const Vec3 next = X - jacobian.partialPivLu().solve(r);
+          Mat3 next_jacobian;
           Vec3 r_next;
           try {
-            r_next = residual(next);
+            r_next = residual(next, next_jacobian);
           } catch (const std::runtime_error&) {  // a step out of the cloud, where MLS has no neighbourhood
             break;
           }
           if (!(r_next.norm() < r.norm())) break;
           X = next;
           r = r_next;
+          jacobian = next_jacobian;
         }
-        not_converged += r.norm() > tolerance;
+        const bool converged = r.norm() <= tolerance;
+        not_converged += !converged;
         largest = std::max(largest, r.norm());
         out.values[v] = X - x;
+        have_last = converged;
+        last_x = x;
+        last_X = X;
+        last_jacobian = jacobian;
       }
+    }
   out.inside = inside;
   out.overlapping = overlapping;
   out.not_converged = not_converged;
@@ -157,17 +201,15 @@ GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, Fie
 double extend_outside(const VoxelGrid& grid, double decay, GridField& field) {
   const auto& n = grid.size;
   const std::int64_t count = grid.count();
-  constexpr std::int64_t kNone = -1;
-  std::vector<std::int64_t> nearest(static_cast<std::size_t>(count), kNone);
-  std::vector<double> distance2(nearest.size(), std::numeric_limits<double>::infinity());
+  const Vec3 spacing = grid.spacing();  // the axes are orthogonal (the image readers check it)
+  // Per voxel, the index steps to its nearest voxel inside (kNone: none found yet).
+  using Offset = std::array<std::int32_t, 3>;
+  constexpr std::int32_t kNone = std::numeric_limits<std::int32_t>::max();
+  std::vector<Offset> offset(static_cast<std::size_t>(count), Offset{kNone, 0, 0});
   for (std::int64_t v = 0; v < count; ++v)
-    if (field.inside_body[static_cast<std::size_t>(v)]) {
-      nearest[static_cast<std::size_t>(v)] = v;
-      distance2[static_cast<std::size_t>(v)] = 0.0;
-    }
-  const auto ijk = [&](std::int64_t v) {
-    return Vec3(static_cast<double>(v % n[0]), static_cast<double>((v / n[0]) % n[1]),
-                static_cast<double>(v / (n[0] * n[1])));
+    if (field.inside_body[static_cast<std::size_t>(v)]) offset[static_cast<std::size_t>(v)] = {0, 0, 0};
+  const auto length2 = [&](const Offset& o) {
+    return Vec3(o[0] * spacing[0], o[1] * spacing[1], o[2] * spacing[2]).squaredNorm();
   };
   // The 13 neighbours before a voxel in storage order; the sweep back uses their opposites.
   std::vector<std::array<std::int64_t, 3>> before;
@@ -175,20 +217,21 @@ double extend_outside(const VoxelGrid& grid, double decay, GridField& field) {
     for (std::int64_t dj = -1; dj <= 1; ++dj)
       for (std::int64_t di = -1; di <= 1; ++di)
         if (dk < 0 || (dk == 0 && (dj < 0 || (dj == 0 && di < 0)))) before.push_back({di, dj, dk});
-  const auto visit = [&](std::int64_t i, std::int64_t j, std::int64_t k, int sign) {
-    const auto v = static_cast<std::size_t>(grid.index(i, j, k));
-    if (distance2[v] == 0.0) return;
+  const auto visit = [&](std::int64_t i, std::int64_t j, std::int64_t k, std::int64_t sign) {
+    Offset& mine = offset[static_cast<std::size_t>(grid.index(i, j, k))];
+    if (mine == Offset{0, 0, 0}) return;
+    double best = mine[0] == kNone ? std::numeric_limits<double>::infinity() : length2(mine);
     for (const auto& d : before) {
       const std::int64_t a = i + sign * d[0], b = j + sign * d[1], c = k + sign * d[2];
       if (a < 0 || b < 0 || c < 0 || a >= n[0] || b >= n[1] || c >= n[2]) continue;
-      const std::int64_t feature = nearest[static_cast<std::size_t>(grid.index(a, b, c))];
-      if (feature == kNone) continue;
-      const double d2 = (grid.axes * (Vec3(static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)) -
-                                      ijk(feature)))
-                            .squaredNorm();
-      if (d2 < distance2[v]) {
-        distance2[v] = d2;
-        nearest[v] = feature;
+      const Offset& theirs = offset[static_cast<std::size_t>(grid.index(a, b, c))];
+      if (theirs[0] == kNone) continue;
+      const Offset candidate = {theirs[0] + static_cast<std::int32_t>(sign * d[0]),
+                                theirs[1] + static_cast<std::int32_t>(sign * d[1]),
+                                theirs[2] + static_cast<std::int32_t>(sign * d[2])};
+      if (const double d2 = length2(candidate); d2 < best) {
+        best = d2;
+        mine = candidate;
       }
     }
   };
@@ -199,15 +242,19 @@ double extend_outside(const VoxelGrid& grid, double decay, GridField& field) {
     for (std::int64_t j = n[1] - 1; j >= 0; --j)
       for (std::int64_t i = n[0] - 1; i >= 0; --i) visit(i, j, k, -1);
   double largest = 0.0;
-  for (std::int64_t v = 0; v < count; ++v) {
-    const auto s = static_cast<std::size_t>(v);
-    if (field.inside_body[s] || nearest[s] == kNone) continue;
-    const double t = std::sqrt(distance2[s]) / decay;
-    if (!(t < 1.0)) continue;
-    const Vec3& surface = field.values[static_cast<std::size_t>(nearest[s])];
-    largest = std::max(largest, surface.norm());
-    field.values[s] = (1.0 - t * t * (3.0 - 2.0 * t)) * surface;
-  }
+#pragma omp parallel for schedule(static) reduction(max : largest)
+  for (std::int64_t k = 0; k < n[2]; ++k)
+    for (std::int64_t j = 0; j < n[1]; ++j)
+      for (std::int64_t i = 0; i < n[0]; ++i) {
+        const auto s = static_cast<std::size_t>(grid.index(i, j, k));
+        const Offset& o = offset[s];
+        if (field.inside_body[s] || o[0] == kNone) continue;
+        const double t = std::sqrt(length2(o)) / decay;
+        if (!(t < 1.0)) continue;
+        const Vec3& surface = field.values[static_cast<std::size_t>(grid.index(i + o[0], j + o[1], k + o[2]))];
+        largest = std::max(largest, surface.norm());
+        field.values[s] = (1.0 - t * t * (3.0 - 2.0 * t)) * surface;
+      }
   return largest;
 }
 

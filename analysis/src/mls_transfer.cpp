@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "mtled/parameters.hpp"
@@ -29,28 +31,125 @@ MlsTransfer::MlsTransfer(const std::vector<Vec3>& nodes, PluginCatalog& catalog)
     search_.nearest(nodes[i], kNeighbours + 1, nearest);  // the node itself comes first
     radius_[i] = 1.3 * (nodes[static_cast<std::size_t>(nearest.back())] - nodes[i]).norm();
   }
-  max_radius_ = radius_.empty() ? 0.0 : *std::max_element(radius_.begin(), radius_.end());
+  fill_bins();
 }
 
-Vec3 MlsTransfer::at(const Vec3& x, const std::vector<Vec3>& values) const {
-  std::vector<Index> candidates, support;
-  search_.within(x, max_radius_, candidates);
-  for (Index i : candidates)
-    if ((nodes_[static_cast<std::size_t>(i)] - x).norm() < radius_[static_cast<std::size_t>(i)]) support.push_back(i);
-  if (static_cast<int>(support.size()) < mls_->minimum_support_size())
-    search_.nearest(x, 2 * kNeighbours, support);  // outside the cloud (a coarser boundary): the nearest nodes
-  std::vector<Vec3> coordinates;
-  std::vector<double> radii, shape(support.size());
-  for (Index i : support) {
-    coordinates.push_back(nodes_[static_cast<std::size_t>(i)]);
-    radii.push_back(
-        std::max(radius_[static_cast<std::size_t>(i)], 1.01 * (nodes_[static_cast<std::size_t>(i)] - x).norm()));
+void MlsTransfer::fill_bins() {
+  if (nodes_.empty()) return;
+  // Bins of half the median support radius (a bin then lists about three times the nodes a point's support holds),
+  // over the box the supports cover; at most about 2^24 of them.
+  std::vector<double> sorted = radius_;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    lo = lo.cwiseMin(nodes_[i] - Vec3::Constant(radius_[i]));
+    hi = hi.cwiseMax(nodes_[i] + Vec3::Constant(radius_[i]));
   }
-  if (!mls_->evaluate(x, coordinates, radii, shape, {}).ok)
+  bin_size_ = std::max(0.5 * sorted[sorted.size() / 2], std::cbrt((hi - lo).prod() / double(1 << 24)));
+  if (!(bin_size_ > 0.0)) bin_size_ = std::max(1e-12, (hi - lo).maxCoeff());
+  bins_origin_ = lo;
+  for (int a = 0; a < 3; ++a) bins_[static_cast<std::size_t>(a)] = std::int64_t((hi[a] - lo[a]) / bin_size_) + 1;
+  const auto each_bin = [&](std::size_t i, auto&& visit) {
+    std::array<std::int64_t, 3> first{}, last{};
+    for (std::size_t a = 0; a < 3; ++a) {
+      const auto axis = static_cast<Index>(a);
+      first[a] = std::max<std::int64_t>(0, std::int64_t((nodes_[i][axis] - radius_[i] - lo[axis]) / bin_size_));
+      last[a] = std::min(bins_[a] - 1, std::int64_t((nodes_[i][axis] + radius_[i] - lo[axis]) / bin_size_));
+    }
+    for (std::int64_t k = first[2]; k <= last[2]; ++k)
+      for (std::int64_t j = first[1]; j <= last[1]; ++j)
+        for (std::int64_t b = first[0]; b <= last[0]; ++b) visit(b + bins_[0] * (j + bins_[1] * k));
+  };
+  // The nodes packed (position, squared radius) in the order of their own bins, so that a bin's list reads nearby
+  // memory.
+  std::vector<Index> order(nodes_.size());
+  std::vector<std::int64_t> home(nodes_.size());
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    order[i] = static_cast<Index>(i);
+    home[i] = bin_of(nodes_[i]);
+  }
+  std::stable_sort(order.begin(), order.end(),
+                   [&](Index a, Index b) { return home[std::size_t(a)] < home[std::size_t(b)]; });
+  packed_.resize(nodes_.size());
+  packed_node_ = order;
+  for (std::size_t p = 0; p < order.size(); ++p) {
+    const auto i = static_cast<std::size_t>(order[p]);
+    packed_[p] << nodes_[i], radius_[i] * radius_[i];
+  }
+  bin_start_.assign(static_cast<std::size_t>(bins_[0] * bins_[1] * bins_[2] + 1), 0);
+  for (const Index i : order) each_bin(std::size_t(i), [&](std::int64_t b) { ++bin_start_[std::size_t(b) + 1]; });
+  for (std::size_t b = 1; b < bin_start_.size(); ++b) bin_start_[b] += bin_start_[b - 1];
+  bin_nodes_.resize(static_cast<std::size_t>(bin_start_.back()));
+  std::vector<std::int64_t> next(bin_start_.begin(), bin_start_.end() - 1);
+  for (std::size_t p = 0; p < order.size(); ++p)
+    each_bin(std::size_t(order[p]),
+             [&](std::int64_t b) { bin_nodes_[std::size_t(next[std::size_t(b)]++)] = static_cast<Index>(p); });
+}
+
+std::int64_t MlsTransfer::bin_of(const Vec3& x) const {
+  std::int64_t index[3];
+  for (int a = 0; a < 3; ++a) {
+    const double q = (x[a] - bins_origin_[a]) / bin_size_;
+    if (!(q >= 0.0 && q < double(bins_[static_cast<std::size_t>(a)]))) return -1;
+    index[a] = std::int64_t(q);
+  }
+  return index[0] + bins_[0] * (index[1] + bins_[1] * index[2]);
+}
+
+Vec3 MlsTransfer::at(const Vec3& x, const std::vector<Vec3>& values) const { return evaluate(x, values, nullptr); }
+
+Vec3 MlsTransfer::at(const Vec3& x, const std::vector<Vec3>& values, Mat3& gradient) const {
+  return evaluate(x, values, &gradient);
+}
+
+Vec3 MlsTransfer::evaluate(const Vec3& x, const std::vector<Vec3>& values, Mat3* gradient) const {
+  // Per-thread scratch: the field on an image grid calls this millions of times.
+  struct Scratch {
+    std::vector<Index> support;
+    std::vector<Vec3> coordinates, gradients;
+    std::vector<double> radii, shape;
+  };
+  thread_local Scratch scratch;
+  auto& [support, coordinates, gradients, radii, shape] = scratch;
+  support.clear();
+  coordinates.clear();
+  radii.clear();
+  if (const std::int64_t b = bin_of(x); b >= 0) {
+    const Index* listed = bin_nodes_.data() + bin_start_[std::size_t(b)];
+    const Index* end = bin_nodes_.data() + bin_start_[std::size_t(b) + 1];
+    for (; listed != end; ++listed) {
+      const Eigen::Vector4d& node = packed_[static_cast<std::size_t>(*listed)];
+      const double distance2 = (node.head<3>() - x).squaredNorm();
+      if (distance2 < node[3]) {
+        support.push_back(packed_node_[static_cast<std::size_t>(*listed)]);
+        coordinates.push_back(node.head<3>());
+        radii.push_back(std::sqrt(std::max(node[3], 1.0201 * distance2)));  // as below: at least 1.01 |x_I - x|
+      }
+    }
+  }
+  if (static_cast<int>(support.size()) < mls_->minimum_support_size()) {
+    search_.nearest(x, 2 * kNeighbours, support);  // outside the cloud (a coarser boundary): the nearest nodes
+    coordinates.clear();
+    radii.clear();
+    for (Index i : support) {
+      coordinates.push_back(nodes_[static_cast<std::size_t>(i)]);
+      radii.push_back(
+          std::max(radius_[static_cast<std::size_t>(i)], 1.01 * (nodes_[static_cast<std::size_t>(i)] - x).norm()));
+    }
+  }
+  shape.resize(support.size());
+  gradients.resize(gradient != nullptr ? support.size() : 0);
+  if (!mls_->evaluate(x, coordinates, radii, shape, gradients).ok)
     throw std::runtime_error(
         fmt::format("cannot interpolate at ({:g}, {:g}, {:g}): degenerate neighbourhood", x[0], x[1], x[2]));
   Vec3 out = Vec3::Zero();
-  for (std::size_t k = 0; k < support.size(); ++k) out += shape[k] * values[static_cast<std::size_t>(support[k])];
+  Mat3 sum = Mat3::Zero();
+  for (std::size_t k = 0; k < support.size(); ++k) {
+    const Vec3& value = values[static_cast<std::size_t>(support[k])];
+    out += shape[k] * value;
+    if (gradient != nullptr) sum.noalias() += value * gradients[k].transpose();
+  }
+  if (gradient != nullptr) *gradient = sum;
   return out;
 }
 

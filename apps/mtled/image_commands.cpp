@@ -37,6 +37,10 @@ std::string result_frame(const ResultField& result, const std::string& frame_opt
   return recorded;
 }
 
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 struct FieldRequest {
   fs::path run;
   const Image& image;  // gives the grid and its frame
@@ -46,9 +50,17 @@ struct FieldRequest {
 };
 
 // The run's displacement on the image's grid, the vectors in the image's frame; the body must cover some voxel.
+// The resampling field's X + u(X) = x is solved to a thousandth of a voxel: a point read that far off moves an
+// interpolated value by a thousandth of the step between neighbouring voxels.
 GridField field_on_image(const FieldRequest& request, const std::vector<fs::path>& plugin_paths) {
+  auto phase = std::chrono::steady_clock::now();
+  const auto lap = [&](const char* what) {
+    log().debug("{}: {:.2f} s", what, seconds_since(phase));
+    phase = std::chrono::steady_clock::now();
+  };
   const fs::path file = result_file_of(request.run);
   const ResultField result = read_result_vtu(file);
+  lap("the run's result read");
   const std::string frame = result_frame(result, request.frame, file);
   const Image& image = request.image;
   if (image.space.empty())
@@ -61,8 +73,9 @@ GridField field_on_image(const FieldRequest& request, const std::vector<fs::path
   grid.axes = to_result * image.grid.axes;
   grid.origin = to_result * image.grid.origin;
   PluginCatalog catalog(plugin_search_path(plugin_paths, {}));
-  GridField field =
-      displacement_on_grid({result.points, result.tets, result.displacement}, grid, request.direction, catalog);
+  GridField field = displacement_on_grid({result.points, result.tets, result.displacement}, grid, request.direction,
+                                         catalog, 1e-3 * image.grid.spacing().minCoeff());
+  lap("the field inside the body");
   if (field.inside == 0)
     throw InputError(image.source, fmt::format("space origin / space directions: no voxel centre of the {}x{}x{} grid "
                                                "lies inside the run's body ({}): the image and the run do not overlap; "
@@ -73,6 +86,7 @@ GridField field_on_image(const FieldRequest& request, const std::vector<fs::path
   if (request.decay_mm > 0.0) {
     const double decay = 1e-3 * request.decay_mm;
     const double largest = extend_outside(image.grid, decay, field);
+    lap("the field outside the body");
     if (decay < 1.5 * largest)
       log().warn(
           "--decay {} mm is under 1.5 times the largest displacement at the surface ({:.3g} mm): outside the "
@@ -93,10 +107,6 @@ GridField field_on_image(const FieldRequest& request, const std::vector<fs::path
 
 void create_parent(const fs::path& file) {
   fs::create_directories(file.parent_path().empty() ? fs::path(".") : file.parent_path());
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 }  // namespace

@@ -109,8 +109,22 @@ std::int16_t nifti_datatype(VoxelType type) {
 
 std::string vector_text(const Vec3& v) { return fmt::format("({:.17g},{:.17g},{:.17g})", v[0], v[1], v[2]); }
 
-std::string nrrd_bytes(const Image& image, const std::map<std::string, std::string>& extra) {
-  const bool vectors = image.components == 3;
+std::string nrrd_bytes(const Image& given, const std::map<std::string, std::string>& extra) {
+  const bool vectors = given.components == 3;
+  // A vector field goes in LPS whatever the grid's frame: ITK and Slicer turn a RAS grid to LPS on reading but leave
+  // the vectors as stored.
+  Image turned;
+  if (vectors && given.space == "RAS") {
+    turned = given;
+    turned.space = "LPS";
+    turned.grid.axes = lps_ras_flip() * given.grid.axes;
+    turned.grid.origin = lps_ras_flip() * given.grid.origin;
+    for (std::size_t v = 0; v < turned.values.size(); v += 3) {
+      turned.values[v] = -turned.values[v];
+      turned.values[v + 1] = -turned.values[v + 1];
+    }
+  }
+  const Image& image = vectors && given.space == "RAS" ? turned : given;
   const VoxelType type = vectors ? VoxelType{VoxelKind::floating, 4} : image.type;
   const Mat3 axes_mm = 1e3 * image.grid.axes;
   std::string header =
@@ -213,7 +227,7 @@ void write_atomically(const fs::path& file, const std::string& bytes) {
 
 std::string gzip(const std::string& bytes) {
   z_stream stream{};
-  if (deflateInit2(&stream, Z_DEFAULT_COMPRESSION, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+  if (deflateInit2(&stream, Z_BEST_SPEED, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK)
     throw std::runtime_error("zlib could not start deflating");
   stream.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
   stream.avail_in = static_cast<uInt>(bytes.size());

@@ -34,8 +34,8 @@ struct BodyState {
   const std::vector<Vec3>& displacement;          // interpolated displacement at the nodes (m)
 };
 
-// The field on `grid` (in the body's frame). Resampling solves X + u(X) = x by Newton's method started from the
-// moved tet's linear map, to `tolerance` (m).
+// The field on `grid` (in the body's frame). Resampling solves X + u(X) = x by Newton's method (u's MLS gradient) from
+// the moved tet's linear map, to `tolerance` (m).
 GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, FieldDirection direction,
                                PluginCatalog& catalog, double tolerance = 1e-9);
 

@@ -56,8 +56,8 @@ Image read_image(const std::filesystem::path& file);
 Image parse_nrrd(const std::string& bytes, const std::string& source);
 Image parse_nifti(const std::string& bytes, const std::string& source);
 
-// Writes `image` as NRRD (.nrrd, gzip, its frame) or NIfTI-1 (.nii or .nii.gz; RAS, the grid and vector values turned
-// from LPS where needed), under a temporary name renamed when complete. Scalars keep their stored type (rounded and
+// Writes `image` as NRRD (.nrrd, gzip; scalars in their frame, vectors in LPS) or NIfTI-1 (.nii or .nii.gz; RAS),
+// the grid and vector values turned to that frame where needed, under a temporary name renamed when complete. Scalars keep their stored type (rounded and
 // clamped to it when whole); vectors are written as float millimetres: NRRD "kinds: vector domain domain domain",
 // NIfTI intent DISPVECT (1006). `key_values` are added to the NRRD header.
 void write_image(const std::filesystem::path& file, const Image& image,
@@ -69,7 +69,8 @@ bool is_nifti_name(const std::filesystem::path& file);
 // LPS and RAS differ by the signs of x and y; the map is its own inverse.
 inline Mat3 lps_ras_flip() { return Vec3(-1.0, -1.0, 1.0).asDiagonal(); }
 
-// gzip (RFC 1952) of `bytes`, with no time stamp: the same bytes for the same input.
+// gzip (RFC 1952) of `bytes` at zlib's fastest level (images are large), with no time stamp: the same bytes for the
+// same input.
 std::string gzip(const std::string& bytes);
 // The bytes, gunzipped (a truncated or corrupt stream is an InputError naming `source`).
 std::string gunzip(const std::string& bytes, const std::string& source);
