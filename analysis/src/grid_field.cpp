@@ -169,6 +169,10 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
         }
         const bool converged = r.norm() <= tolerance;
         not_converged += !converged;
+        if (!converged) {
+#pragma omp critical(not_converged_voxels)
+          out.not_converged_voxels.push_back(static_cast<std::int64_t>(v));
+        }
         largest = std::max(largest, r.norm());
         out.values[v] = X - x;
         have_last = converged;
@@ -180,6 +184,7 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
   out.inside = inside;
   out.overlapping = overlapping;
   out.not_converged = not_converged;
+  std::sort(out.not_converged_voxels.begin(), out.not_converged_voxels.end());  // the same list on any thread count
   out.largest_residual = largest;
 }
 

@@ -29,6 +29,10 @@ struct MeshOptions {
 struct FieldOptions {
   std::filesystem::path run;     // run folder or result .vtu
   std::filesystem::path like;    // an image whose grid the field is sampled on (NRRD, NIfTI)
+  // Or the grid itself: the first voxel's centre (mm), the spacing (mm), the voxels per axis and the frame.
+  std::vector<double> origin_mm, spacing_mm;
+  std::vector<std::int64_t> size;
+  std::string space;
   std::filesystem::path output;  // .nrrd, .nii or .nii.gz
   std::string direction = "resampling";  // or "forward"
   std::string frame;             // "LPS" or "RAS": the result's frame when its mesh recorded none

@@ -3,6 +3,7 @@
 // (analysis/include/mtled/analysis/image_warp.hpp).
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 
@@ -96,6 +97,17 @@ GridField field_on_image(const FieldRequest& request, const std::vector<fs::path
   if (request.direction == FieldDirection::resampling) {
     log().info("X + u(X) = x solved to {:.3g} m at worst; {} voxels not converged", field.largest_residual,
                field.not_converged);
+    std::string named;
+    const auto& n = image.grid.size;
+    for (std::size_t k = 0; k < std::min<std::size_t>(5, field.not_converged_voxels.size()); ++k) {
+      const std::int64_t v = field.not_converged_voxels[k];
+      const Vec3 at = 1e3 * image.grid.centre(v % n[0], (v / n[0]) % n[1], v / (n[0] * n[1]));
+      named += fmt::format("{}({}, {}, {}) at ({:.1f}, {:.1f}, {:.1f}) mm", k == 0 ? "" : ", ", v % n[0],
+                           (v / n[0]) % n[1], v / (n[0] * n[1]), at[0], at[1], at[2]);
+    }
+    if (field.not_converged > 0)
+      log().warn("not converged (the moved body folds there, or the field is too rough): voxel {}{} ({})", named,
+                 field.not_converged > 5 ? ", ..." : "", image.space);
     if (field.overlapping > 0)
       log().warn(
           "{} voxels lie in more than one moved tet: the body folded there, and the field holds one of the "
@@ -109,6 +121,26 @@ void create_parent(const fs::path& file) {
   fs::create_directories(file.parent_path().empty() ? fs::path(".") : file.parent_path());
 }
 
+// The grid --origin, --spacing, --size and --space give, as an image of no values.
+Image given_grid(const FieldOptions& options) {
+  if (options.size.size() != 3)
+    throw InputError("--like",
+                     "give the image whose grid the field is sampled on (--like IMAGE), or the grid itself: "
+                     "--origin X Y Z --spacing MM --size NX NY NZ --space LPS|RAS");
+  Image image;
+  image.source = "the grid given by --origin, --spacing, --size and --space";
+  image.space = options.space;
+  const std::vector<double>& s = options.spacing_mm;
+  if (s.size() != 1 && s.size() != 3)
+    throw InputError("--spacing", fmt::format("{} numbers: one (cubic voxels) or three (mm)", s.size()));
+  image.grid.axes = 1e-3 * Vec3(s[0], s.size() == 3 ? s[1] : s[0], s.size() == 3 ? s[2] : s[0]).asDiagonal();
+  image.grid.origin = 1e-3 * Vec3(options.origin_mm[0], options.origin_mm[1], options.origin_mm[2]);
+  for (std::size_t a = 0; a < 3; ++a) image.grid.size[a] = options.size[a];
+  if (image.grid.count() > (std::int64_t{1} << 31))
+    throw InputError("--size", "more than 2^31 voxels: give a coarser grid or a smaller box");
+  return image;
+}
+
 }  // namespace
 
 int field_command(const FieldOptions& options, const std::vector<fs::path>& plugin_paths) {
@@ -117,7 +149,7 @@ int field_command(const FieldOptions& options, const std::vector<fs::path>& plug
                                                 options.direction));
   (void)is_nifti_name(options.output);  // a name of no image format fails before any work
   const auto start = std::chrono::steady_clock::now();
-  Image image = read_image(options.like);
+  Image image = options.like.empty() ? given_grid(options) : read_image(options.like);
   const FieldDirection direction =
       options.direction == "forward" ? FieldDirection::forward : FieldDirection::resampling;
   const GridField field =
@@ -135,8 +167,8 @@ int field_command(const FieldOptions& options, const std::vector<fs::path>& plug
                   ? std::map<std::string, std::string>{{"displacement field type", "modeling"}}
                   : std::map<std::string, std::string>{});
   log().info("{} displacement field on {}x{}x{} voxels of {}: {} inside the body, written to {} ({:.2f} s)",
-             options.direction, image.grid.size[0], image.grid.size[1], image.grid.size[2], options.like.string(),
-             field.inside, options.output.string(), seconds_since(start));
+             options.direction, image.grid.size[0], image.grid.size[1], image.grid.size[2], image.source, field.inside,
+             options.output.string(), seconds_since(start));
   return 0;
 }
 

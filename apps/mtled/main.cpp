@@ -80,21 +80,29 @@ void add_scene_commands(CLI::App& cli, Commands& c) {
                                 "an argument for the GoogleTest runner, such as --gtest=--gtest_brief=1 (repeatable)");
 }
 
-void add_analysis_commands(CLI::App& cli, Commands& c) {
-  c.compare_cmd = cli.add_subcommand(
-      "compare", "NRMSE per displacement component between two runs (A interpolated onto B's nodes when they differ)");
-  c.compare_cmd->add_option("run_a", c.compare.a, "run folder (or result .vtu) A")->required();
-  c.compare_cmd->add_option("run_b", c.compare.b, "run folder (or result .vtu) B: the reference, whose nodes are used")
-      ->required();
-  c.compare_cmd->add_flag("--json", c.compare.json, "machine-readable output");
-  c.compare_cmd->add_option("--histogram", c.compare.histogram, "write histograms of u_A - u_B per component (SVG)");
-  c.compare_cmd->add_option("--bins", c.compare.bins, "histogram bins (default 41)")->check(CLI::PositiveNumber);
-
+// Back to the image: the field on an image grid and the warped image (docs/label-maps.md).
+void add_image_commands(CLI::App& cli, Commands& c) {
   c.field_cmd = cli.add_subcommand(
       "field", "a run's displacement on an image's grid, as a displacement-field image (NRRD, NIfTI) for 3D Slicer "
                "and ITK (docs/label-maps.md)");
   c.field_cmd->add_option("run", c.field.run, "run folder (or result .vtu)")->required();
-  c.field_cmd->add_option("--like", c.field.like, "image whose grid the field is sampled on (NRRD, NIfTI)")->required();
+  auto* like =
+      c.field_cmd->add_option("--like", c.field.like, "image whose grid the field is sampled on (NRRD, NIfTI)");
+  auto* origin =
+      c.field_cmd->add_option("--origin", c.field.origin_mm, "or the grid: its first voxel's centre (mm)")->expected(3);
+  auto* spacing = c.field_cmd->add_option("--spacing", c.field.spacing_mm, "the grid's spacing (mm): 1 or 3 numbers")
+                      ->expected(1, 3)
+                      ->check(CLI::PositiveNumber);
+  auto* size = c.field_cmd->add_option("--size", c.field.size, "the grid's voxels along each axis")
+                   ->expected(3)
+                   ->check(CLI::PositiveNumber);
+  auto* space = c.field_cmd->add_option("--space", c.field.space, "the grid's frame: LPS or RAS")
+                    ->check(CLI::IsMember({"LPS", "RAS"}));
+  for (CLI::Option* grid : {origin, spacing, size, space}) {
+    grid->excludes(like);
+    for (CLI::Option* other : {origin, spacing, size, space})
+      if (other != grid) grid->needs(other);
+  }
   c.field_cmd->add_option("-o,--output", c.field.output, "the field (.nrrd, or .nii / .nii.gz: RAS, intent DISPVECT)")
       ->required();
   c.field_cmd->add_option("--direction", c.field.direction,
@@ -120,6 +128,17 @@ void add_analysis_commands(CLI::App& cli, Commands& c) {
                          "outside the body, the displacement fades to zero over this many mm (default 10; 0: the "
                          "image outside the deformed body is not moved)")
       ->check(CLI::NonNegativeNumber);
+}
+
+void add_analysis_commands(CLI::App& cli, Commands& c) {
+  c.compare_cmd = cli.add_subcommand(
+      "compare", "NRMSE per displacement component between two runs (A interpolated onto B's nodes when they differ)");
+  c.compare_cmd->add_option("run_a", c.compare.a, "run folder (or result .vtu) A")->required();
+  c.compare_cmd->add_option("run_b", c.compare.b, "run folder (or result .vtu) B: the reference, whose nodes are used")
+      ->required();
+  c.compare_cmd->add_flag("--json", c.compare.json, "machine-readable output");
+  c.compare_cmd->add_option("--histogram", c.compare.histogram, "write histograms of u_A - u_B per component (SVG)");
+  c.compare_cmd->add_option("--bins", c.compare.bins, "histogram bins (default 41)")->check(CLI::PositiveNumber);
 
   c.study_cmd = cli.add_subcommand("study", "run a sweep of scene settings against a reference (docs/studies.md)");
   c.study_cmd->add_option("study", c.study.study, "study file (JSON)")->required();
@@ -204,6 +223,7 @@ int main(int argc, char** argv) {
   add_global_options(cli, c);
   add_scene_commands(cli, c);
   add_analysis_commands(cli, c);
+  add_image_commands(cli, c);
   try {
     cli.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

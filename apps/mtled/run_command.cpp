@@ -11,6 +11,7 @@
 #include "commands.hpp"
 #include "mtled/analysis/postprocess.hpp"
 #include "mtled/analysis/scene_sections.hpp"
+#include "mtled/io/image.hpp"
 #include "mtled/io/run_outputs.hpp"
 #include "mtled/log.hpp"
 #include "mtled/monitors/scene_monitors.hpp"
@@ -45,6 +46,7 @@ class SceneRun {
       : wall_start_(wall_start),
         scene_(scene),
         catalog_(catalog),
+        plugin_paths_(options.scene.plugin_paths),
         folder_(output_folder(options)),
         summary_(folder_, {{"mtled_version", MTLED_VERSION_STRING},
                            {"scene", fs::absolute(options.scene.scene).string()},
@@ -56,6 +58,7 @@ class SceneRun {
     try {
       const auto setup_start = Clock::now();
       simulation_ = std::make_unique<Simulation>(scene_, catalog_);
+      check_displacement_field();
       folded_ = add_scene_monitors(*simulation_, scene_);
       if (auto failure = injected_failure()) simulation_->add_monitor(failure);
       writers_ = add_scene_writers(*simulation_, scene_, folder_);
@@ -132,10 +135,47 @@ class SceneRun {
     return 1;
   }
 
-  // result.vtu, then summary.json with status "ok": the needle, the reactions and the error indicators.
+  // The output section's displacement field needs an image with a frame and a mesh that records its own: checked
+  // before the run, not after it.
+  void check_displacement_field() const {
+    const auto like = scene_.section("output").optional_file("displacement_field_like");
+    if (!like) return;
+    if (simulation_->model().mesh().coordinate_system.empty())
+      throw InputError("/output/displacement_field_like",
+                       "the mesh records no patient frame (LPS or RAS), so where it lies in the image is not known: "
+                       "mesh the image itself (a label_map mesh source records it), or leave this out and run mtled "
+                       "field with --frame after the run");
+    if (read_image(*like).space.empty())
+      throw InputError(like->string(), "space: the image names no patient frame (LPS or RAS)");
+  }
+
+  // The field on the output section's image, written next to result.vtu (mtled field's work).
+  void write_displacement_field() const {
+    const Parameters& output = scene_.section("output");
+    const auto like = output.optional_file("displacement_field_like");
+    if (!like) return;
+    FieldOptions field;
+    field.run = folder_.path();
+    field.like = *like;
+    field.output = folder_.path() / (output.string("displacement_field_format") == "nifti" ? "displacement_field.nii.gz"
+                                                                                           : "displacement_field.nrrd");
+    field.direction = output.string("displacement_field_direction");
+    field.frame = simulation_->model().mesh().coordinate_system;
+    field.decay_mm = 1e3 * output.number("displacement_field_decay");
+    field_command(field, plugin_paths_);
+  }
+
+  // result.vtu (and the displacement field the output section asks for), then summary.json with status "ok": the
+  // needle, the reactions and the error indicators.
   int succeeded(double solve_time) {
     const auto u = write_state(folder_, "result.vtu", simulation_->model().view(), simulation_->displacement(),
                                scene_.section("output"), true);
+    try {
+      write_displacement_field();
+    } catch (const InputError& e) {
+      finish_without_result("invalid_input", solve_time, e.what());
+      throw;
+    }
     record(solve_time);
     summary_.record_result(*simulation_, u);
     summary_["error_indicators"] = error_indicators(*simulation_);
@@ -149,6 +189,7 @@ class SceneRun {
   const Clock::time_point wall_start_;  // before the scene was read
   const Scene& scene_;
   PluginCatalog& catalog_;
+  const std::vector<fs::path> plugin_paths_;
   int threads_ = 1;
   const OutputFolder folder_;
   RunSummary summary_;

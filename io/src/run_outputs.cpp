@@ -41,6 +41,27 @@ SceneSection output_section() {
         .doc("unit of the coordinates and displacements in result.vtu and steps/*.vtu: \"m\", or \"mm\", 3D "
              "Slicer's unit, so that a result of a label-map scene loads on top of its image (the file is tagged "
              "LENGTH_UNIT; mtled compare reads it back in metres); stresses stay in Pa");
+    d.file("displacement_field_like")
+        .optional()
+        .doc("an image (NRRD, NIfTI; the label map the mesh was made from, the pre-operative MRI) on whose grid the "
+             "run's displacement is written after the run, as displacement_field.nrrd or .nii.gz (what mtled field "
+             "--like IMAGE writes; docs/label-maps.md); the mesh must record its frame, as a label-map mesh does");
+    d.string("displacement_field_format")
+        .defaults("nrrd")
+        .choices({"nrrd", "nifti"})
+        .doc("displacement_field.nrrd (LPS, the form 3D Slicer saves grid transforms in) or displacement_field.nii.gz "
+             "(NIfTI, intent DISPVECT, RAS)");
+    d.string("displacement_field_direction")
+        .defaults("resampling")
+        .choices({"resampling", "forward"})
+        .doc("resampling: at each voxel of the deformed body the step back to its reference point, what Slicer and "
+             "ITK resample an image with; forward: at each voxel of the reference body where its material goes");
+    d.number("displacement_field_decay")
+        .defaults(0.01)
+        .non_negative()
+        .unit("m")
+        .doc("outside the body the field is the nearest surface value fading to zero over this distance; 0: zero "
+             "outside");
     return d;
   }();
   return {"output", &declaration};

@@ -87,7 +87,20 @@ TEST(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
       ASSERT_LT((d - expected).norm(), 1e-6) << "voxel " << v;
     }
     EXPECT_GT(checked, 4000);
+    // The same grid given by its numbers instead of an image: the same field.
+    const fs::path numbers = folder / (direction + "-numbers.nrrd");
+    const auto given = test::run_mtled({"field", (folder / "run").string(), "--origin", "-1", "-1", "-1", "--spacing",
+                                        "0.6", "--size", "24", "24", "24", "--space", "LPS", "-o", numbers.string(),
+                                        "--frame", "LPS", "--direction", direction, "--decay", "0"});
+    ASSERT_EQ(given.exit_code, 0) << given.output;
+    const std::vector<Vec3> same = read_field(numbers);
+    ASSERT_EQ(same.size(), field.size());
+    for (std::size_t v = 0; v < same.size(); ++v) ASSERT_LT((same[v] - field[v]).norm(), 1e-12) << "voxel " << v;
   }
+  const auto neither = test::run_mtled(
+      {"field", (folder / "run").string(), "-o", (folder / "neither.nrrd").string(), "--frame", "LPS"});
+  EXPECT_EQ(neither.exit_code, 2) << neither.output;
+  EXPECT_NE(neither.output.find("--like IMAGE"), std::string::npos) << neither.output;
 
   // A mesh made from the label map records its frame (summary.json): no --frame needed.
   json labelled =
@@ -110,12 +123,34 @@ TEST(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
       {"field", (folder / "labelled").string(), "--like", grid.string(), "-o", (folder / "labelled.nrrd").string()});
   EXPECT_EQ(framed.exit_code, 0) << framed.output;
 
+  // The scene's output section asks for the same field: written beside result.vtu, the same bytes.
+  labelled["output"] = {{"displacement_field_like", grid.string()}};
+  test::write_text(folder / "with-field.json", labelled.dump(2));
+  const auto with_field = test::run_mtled(
+      {"run", (folder / "with-field.json").string(), "-o", (folder / "with-field").string(), "--no-progress"});
+  ASSERT_EQ(with_field.exit_code, 0) << with_field.output;
+  const auto by_hand = test::run_mtled({"field", (folder / "with-field").string(), "--like", grid.string(), "-o",
+                                        (folder / "by-hand.nrrd").string()});
+  ASSERT_EQ(by_hand.exit_code, 0) << by_hand.output;
+  EXPECT_EQ(test::read_text(folder / "with-field" / "displacement_field.nrrd"),
+            test::read_text(folder / "by-hand.nrrd"));
+
   // The cube's Gmsh mesh records no patient frame: the command says how to give one.
   const auto frameless = test::run_mtled(
       {"field", (folder / "run").string(), "--like", grid.string(), "-o", (folder / "no.nrrd").string()});
   EXPECT_EQ(frameless.exit_code, 2) << frameless.output;
   EXPECT_NE(frameless.output.find("--frame LPS"), std::string::npos) << frameless.output;
   EXPECT_FALSE(fs::exists(folder / "no.nrrd"));
+  // ... and a scene whose mesh records no frame cannot ask for the field: refused before the run.
+  json frameless_scene =
+      json::parse(test::read_text(fs::path(MTLED_TEST_SOURCE_DIR) / "share/scenes/uniaxial_cube_ogden.json"));
+  frameless_scene["output"]["displacement_field_like"] = grid.string();
+  test::write_text(folder / "frameless.json", frameless_scene.dump(2));
+  const auto refused = test::run_mtled(
+      {"run", (folder / "frameless.json").string(), "-o", (folder / "frameless").string(), "--no-progress"});
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  EXPECT_NE(refused.output.find("/output/displacement_field_like"), std::string::npos) << refused.output;
+  EXPECT_FALSE(fs::exists(folder / "frameless" / "result.vtu"));
 }
 
 }  // namespace

@@ -25,7 +25,8 @@ struct GridField {
   std::int64_t inside = 0;         // voxels inside the (reference or moved) body
   std::int64_t overlapping = 0;    // resampling: voxels inside more than one moved tet (the body folded there)
   std::int64_t not_converged = 0;  // resampling: voxels whose X + u(X) = x was not solved to the tolerance
-  double largest_residual = 0.0;   // resampling: the largest |X + u(X) - x| left (m)
+  std::vector<std::int64_t> not_converged_voxels;  // resampling: those voxels (storage indices), in order
+  double largest_residual = 0.0;                   // resampling: the largest |X + u(X) - x| left (m)
 };
 
 struct BodyState {
