@@ -137,6 +137,48 @@ TEST(ImageWarp, TheResamplingFieldIsTheExactOneInEitherFormat) {
   }
 }
 
+// An intensity image that is linear in space, I(X) = X_1 + 2 X_2 + 3 X_3 (LPS mm), float, saved as NIfTI (RAS):
+// trilinear interpolation reproduces it, so inside the moved cube the warped image must hold I(F^-1 x) at every
+// voxel centre, to the thousandth of a voxel the resampling field is solved to, plus float round-off.
+TEST(ImageWarp, ALinearIntensityImageIsReadWhereTheTissueCameFrom) {
+  const Fixture f;
+  Image ramp = cube_label_map();
+  ramp.type = {VoxelKind::floating, 4};
+  for (std::int64_t k = 0; k < kHeight; ++k)
+    for (std::int64_t j = 0; j < kLateral; ++j)
+      for (std::int64_t i = 0; i < kLateral; ++i) {
+        const Vec3 x = 1e3 * ramp.grid.centre(i, j, k);
+        ramp.values[static_cast<std::size_t>(ramp.grid.index(i, j, k))] = x[0] + 2.0 * x[1] + 3.0 * x[2];
+      }
+  const fs::path image = f.folder / "ramp.nii.gz", out = f.folder / "ramp-warped.nrrd";
+  write_image(image, ramp);
+  const auto warped = test::run_mtled({"warp", image.string(), f.run.string(), "-o", out.string(), "--frame", "LPS"});
+  ASSERT_EQ(warped.exit_code, 0) << warped.output;
+  EXPECT_NE(warped.output.find("linear interpolation"), std::string::npos) << warped.output;
+  const Image result = read_image(out);
+  ASSERT_EQ(result.space, "RAS");  // the NIfTI image's frame, kept
+  const Vec3 stretch(f.lateral, f.lateral, kStretch);
+  double worst = 0.0;
+  std::int64_t checked = 0;
+  for (std::int64_t k = 0; k < kHeight; ++k)
+    for (std::int64_t j = 0; j < kLateral; ++j)
+      for (std::int64_t i = 0; i < kLateral; ++i) {
+        const Vec3 x = lps_ras_flip() * result.grid.centre(i, j, k);  // LPS, the run's frame
+        const Vec3 X = x.cwiseQuotient(stretch);
+        if (!((X.array() > 0.2e-3).all() && (X.array() < kSide - 0.2e-3).all())) continue;
+        const double expected = 1e3 * (X[0] + 2.0 * X[1] + 3.0 * X[2]);  // the ramp was written in LPS mm
+        worst =
+            std::max(worst, std::abs(result.values[static_cast<std::size_t>(result.grid.index(i, j, k))] - expected));
+        ++checked;
+      }
+  // |grad I| = sqrt(14) per mm times the 1e-4 mm the reference point may be off, and float round-off of values
+  // up to 60.
+  EXPECT_LT(worst, std::sqrt(14.0) * 1e-4 + 1e-5);
+  EXPECT_GT(checked, 800000);
+  std::printf("linear intensities: %lld voxels, largest difference %.3g (mm of the ramp)\n",
+              static_cast<long long>(checked), worst);
+}
+
 TEST(ImageWarp, BadImagesAreRefusedNamingTheFileAndNothingIsWritten) {
   const Fixture f;
   // A displacement field given to warp.
