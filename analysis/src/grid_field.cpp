@@ -203,63 +203,100 @@ GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, Fie
   return out;
 }
 
+namespace {
+
+// One line of the squared Euclidean distance transform with its nearest sites (Felzenszwalb and Huttenlocher,
+// "Distance transforms of sampled functions", Theory of Computing 8, 2012): d(p) = min_q (h (p - q))^2 + f(q), the
+// lower envelope of the parabolas rooted at the q where f is finite. `site` goes along with each q's value.
+struct Envelope {
+  std::vector<std::int64_t> roots;
+  std::vector<double> bounds;
+
+  void transform(std::vector<double>& f, std::vector<std::int64_t>& site, double h) {
+    const auto n = static_cast<std::int64_t>(f.size());
+    const double h2 = h * h;
+    roots.clear();
+    bounds.clear();
+    const auto meet = [&](std::int64_t q, std::int64_t r) {  // where the parabolas of q > r cross
+      return ((f[std::size_t(q)] + h2 * double(q * q)) - (f[std::size_t(r)] + h2 * double(r * r))) /
+             (2.0 * h2 * double(q - r));
+    };
+    for (std::int64_t q = 0; q < n; ++q) {
+      if (!std::isfinite(f[std::size_t(q)])) continue;
+      double s = -std::numeric_limits<double>::infinity();
+      while (!roots.empty() && (s = meet(q, roots.back())) <= bounds.back()) {
+        roots.pop_back();
+        bounds.pop_back();
+        s = -std::numeric_limits<double>::infinity();
+      }
+      roots.push_back(q);
+      bounds.push_back(s);  // this parabola is lowest from s on
+    }
+    if (roots.empty()) return;
+    const std::vector<double> values = f;
+    const std::vector<std::int64_t> sites = site;
+    std::size_t k = 0;
+    for (std::int64_t p = 0; p < n; ++p) {
+      while (k + 1 < roots.size() && bounds[k + 1] <= double(p)) ++k;
+      const std::int64_t q = roots[k];
+      f[std::size_t(p)] = h2 * double((p - q) * (p - q)) + values[std::size_t(q)];
+      site[std::size_t(p)] = sites[std::size_t(q)];
+    }
+  }
+};
+
+}  // namespace
+
 double extend_outside(const VoxelGrid& grid, double decay, GridField& field) {
   const auto& n = grid.size;
   const std::int64_t count = grid.count();
   const Vec3 spacing = grid.spacing();  // the axes are orthogonal (the image readers check it)
-  // Per voxel, the index steps to its nearest voxel inside (kNone: none found yet).
-  using Offset = std::array<std::int32_t, 3>;
-  constexpr std::int32_t kNone = std::numeric_limits<std::int32_t>::max();
-  std::vector<Offset> offset(static_cast<std::size_t>(count), Offset{kNone, 0, 0});
+  constexpr std::int64_t kNone = -1;
+  // Per voxel, the squared distance to the nearest voxel inside and that voxel, exact: one pass along each index
+  // axis, each line on its own (so the lines go in parallel).
+  std::vector<double> distance2(static_cast<std::size_t>(count), std::numeric_limits<double>::infinity());
+  std::vector<std::int64_t> nearest(distance2.size(), kNone);
   for (std::int64_t v = 0; v < count; ++v)
-    if (field.inside_body[static_cast<std::size_t>(v)]) offset[static_cast<std::size_t>(v)] = {0, 0, 0};
-  const auto length2 = [&](const Offset& o) {
-    return Vec3(o[0] * spacing[0], o[1] * spacing[1], o[2] * spacing[2]).squaredNorm();
-  };
-  // The 13 neighbours before a voxel in storage order; the sweep back uses their opposites.
-  std::vector<std::array<std::int64_t, 3>> before;
-  for (std::int64_t dk = -1; dk <= 0; ++dk)
-    for (std::int64_t dj = -1; dj <= 1; ++dj)
-      for (std::int64_t di = -1; di <= 1; ++di)
-        if (dk < 0 || (dk == 0 && (dj < 0 || (dj == 0 && di < 0)))) before.push_back({di, dj, dk});
-  const auto visit = [&](std::int64_t i, std::int64_t j, std::int64_t k, std::int64_t sign) {
-    Offset& mine = offset[static_cast<std::size_t>(grid.index(i, j, k))];
-    if (mine == Offset{0, 0, 0}) return;
-    double best = mine[0] == kNone ? std::numeric_limits<double>::infinity() : length2(mine);
-    for (const auto& d : before) {
-      const std::int64_t a = i + sign * d[0], b = j + sign * d[1], c = k + sign * d[2];
-      if (a < 0 || b < 0 || c < 0 || a >= n[0] || b >= n[1] || c >= n[2]) continue;
-      const Offset& theirs = offset[static_cast<std::size_t>(grid.index(a, b, c))];
-      if (theirs[0] == kNone) continue;
-      const Offset candidate = {theirs[0] + static_cast<std::int32_t>(sign * d[0]),
-                                theirs[1] + static_cast<std::int32_t>(sign * d[1]),
-                                theirs[2] + static_cast<std::int32_t>(sign * d[2])};
-      if (const double d2 = length2(candidate); d2 < best) {
-        best = d2;
-        mine = candidate;
-      }
+    if (field.inside_body[static_cast<std::size_t>(v)]) {
+      distance2[static_cast<std::size_t>(v)] = 0.0;
+      nearest[static_cast<std::size_t>(v)] = v;
     }
-  };
-  for (std::int64_t k = 0; k < n[2]; ++k)
-    for (std::int64_t j = 0; j < n[1]; ++j)
-      for (std::int64_t i = 0; i < n[0]; ++i) visit(i, j, k, 1);
-  for (std::int64_t k = n[2] - 1; k >= 0; --k)
-    for (std::int64_t j = n[1] - 1; j >= 0; --j)
-      for (std::int64_t i = n[0] - 1; i >= 0; --i) visit(i, j, k, -1);
+  const std::int64_t stride[3] = {1, n[0], n[0] * n[1]};
+  for (int axis = 0; axis < 3; ++axis) {
+    const int a = (axis + 1) % 3, b = (axis + 2) % 3;  // the other two axes span the lines' starts
+    const std::int64_t length = n[std::size_t(axis)];
+#pragma omp parallel
+    {
+      Envelope envelope;
+      std::vector<double> line(static_cast<std::size_t>(length));
+      std::vector<std::int64_t> sites(line.size());
+#pragma omp for collapse(2) schedule(static)
+      for (std::int64_t y = 0; y < n[std::size_t(b)]; ++y)
+        for (std::int64_t x = 0; x < n[std::size_t(a)]; ++x) {
+          const std::int64_t first = x * stride[a] + y * stride[b];
+          for (std::int64_t p = 0; p < length; ++p) {
+            line[std::size_t(p)] = distance2[std::size_t(first + p * stride[axis])];
+            sites[std::size_t(p)] = nearest[std::size_t(first + p * stride[axis])];
+          }
+          envelope.transform(line, sites, spacing[axis]);
+          for (std::int64_t p = 0; p < length; ++p) {
+            distance2[std::size_t(first + p * stride[axis])] = line[std::size_t(p)];
+            nearest[std::size_t(first + p * stride[axis])] = sites[std::size_t(p)];
+          }
+        }
+    }
+  }
   double largest = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : largest)
-  for (std::int64_t k = 0; k < n[2]; ++k)
-    for (std::int64_t j = 0; j < n[1]; ++j)
-      for (std::int64_t i = 0; i < n[0]; ++i) {
-        const auto s = static_cast<std::size_t>(grid.index(i, j, k));
-        const Offset& o = offset[s];
-        if (field.inside_body[s] || o[0] == kNone) continue;
-        const double t = std::sqrt(length2(o)) / decay;
-        if (!(t < 1.0)) continue;
-        const Vec3& surface = field.values[static_cast<std::size_t>(grid.index(i + o[0], j + o[1], k + o[2]))];
-        largest = std::max(largest, surface.norm());
-        field.values[s] = (1.0 - t * t * (3.0 - 2.0 * t)) * surface;
-      }
+  for (std::int64_t v = 0; v < count; ++v) {
+    const auto s = static_cast<std::size_t>(v);
+    if (field.inside_body[s] || nearest[s] == kNone) continue;
+    const double t = std::sqrt(distance2[s]) / decay;
+    if (!(t < 1.0)) continue;
+    const Vec3& surface = field.values[static_cast<std::size_t>(nearest[s])];
+    largest = std::max(largest, surface.norm());
+    field.values[s] = (1.0 - t * t * (3.0 - 2.0 * t)) * surface;
+  }
   return largest;
 }
 

@@ -44,37 +44,37 @@ T stored(double value) {
 }
 
 template <class T>
-void append_as(std::string& bytes, std::span<const double> values) {
+void append_as(std::string& bytes, std::span<const double> values, double scale) {
   const std::size_t start = bytes.size();
   bytes.resize(start + values.size() * sizeof(T));
-  for (std::size_t v = 0; v < values.size(); ++v) put(bytes, start + v * sizeof(T), stored<T>(values[v]));
+  for (std::size_t v = 0; v < values.size(); ++v) put(bytes, start + v * sizeof(T), stored<T>(scale * values[v]));
 }
 
-// The values as the file stores them, `type` (native little-endian bytes).
-std::string encode(std::span<const double> values, VoxelType type) {
+// `scale` times the values as the file stores them, `type` (native little-endian bytes).
+std::string encode(std::span<const double> values, VoxelType type, double scale = 1.0) {
   std::string bytes;
   using K = VoxelKind;
   const auto is = [&](K kind, int size) { return type.kind == kind && type.bytes == size; };
   if (is(K::unsigned_integer, 1))
-    append_as<std::uint8_t>(bytes, values);
+    append_as<std::uint8_t>(bytes, values, scale);
   else if (is(K::signed_integer, 1))
-    append_as<std::int8_t>(bytes, values);
+    append_as<std::int8_t>(bytes, values, scale);
   else if (is(K::signed_integer, 2))
-    append_as<std::int16_t>(bytes, values);
+    append_as<std::int16_t>(bytes, values, scale);
   else if (is(K::unsigned_integer, 2))
-    append_as<std::uint16_t>(bytes, values);
+    append_as<std::uint16_t>(bytes, values, scale);
   else if (is(K::signed_integer, 4))
-    append_as<std::int32_t>(bytes, values);
+    append_as<std::int32_t>(bytes, values, scale);
   else if (is(K::unsigned_integer, 4))
-    append_as<std::uint32_t>(bytes, values);
+    append_as<std::uint32_t>(bytes, values, scale);
   else if (is(K::signed_integer, 8))
-    append_as<std::int64_t>(bytes, values);
+    append_as<std::int64_t>(bytes, values, scale);
   else if (is(K::unsigned_integer, 8))
-    append_as<std::uint64_t>(bytes, values);
+    append_as<std::uint64_t>(bytes, values, scale);
   else if (is(K::floating, 4))
-    append_as<float>(bytes, values);
+    append_as<float>(bytes, values, scale);
   else
-    append_as<double>(bytes, values);
+    append_as<double>(bytes, values, scale);
   return bytes;
 }
 
@@ -144,10 +144,8 @@ std::string nrrd_bytes(const Image& given, const std::map<std::string, std::stri
   std::map<std::string, std::string> key_values = image.key_values;
   for (const auto& [key, value] : extra) key_values[key] = value;
   for (const auto& [key, value] : key_values) header += fmt::format("{}:={}\n", key, value);
-  std::vector<double> values = image.values;
-  if (vectors)
-    for (double& v : values) v *= 1e3;  // millimetres
-  return header + "\n" + gzip(encode(values, type));
+  header += "\n";
+  return header + gzip(encode(image.values, type, vectors ? 1e3 : 1.0));  // vectors in millimetres
 }
 
 // NIfTI-1 single file (the NIfTI-1 standard's nifti1.h layout): a 348-byte header, 4 bytes of no extension, the
@@ -294,6 +292,11 @@ void write_image(const fs::path& file, const Image& image, const std::map<std::s
   if (!is_nifti_name(file)) {
     write_atomically(file, nrrd_bytes(image, key_values));
   } else {
+    for (const std::int64_t n : image.grid.size)
+      if (n > 32767)
+        throw InputError(file.string(), fmt::format("{} voxels along an axis: NIfTI-1 holds at most 32767; write "
+                                                    "NRRD (.nrrd) instead",
+                                                    n));
     const std::string bytes = nifti_bytes(image);
     write_atomically(file, ends_with(file.filename().string(), ".gz") ? gzip(bytes) : bytes);
   }

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
+#include <limits>
 
 #include "test_support.hpp"
 
@@ -92,6 +93,65 @@ TEST(GridField, ResamplingTakesEachVoxelOfTheMovedBodyBackToItsReferencePoint) {
   EXPECT_EQ(field.overlapping, 0);
   EXPECT_EQ(field.not_converged, 0);
   EXPECT_LT(field.largest_residual, 1e-9);
+}
+
+// The extension outside the body against a search of every voxel inside: on a grid of unequal spacings, with a body
+// of two pieces, each voxel outside holds s(t) times the value of a voxel inside at the least distance, t that
+// distance over the decay, s(t) = 1 - 3t^2 + 2t^3; zero from the decay distance on.
+TEST(GridField, TheExtensionOutsideIsTheNearestInsideValueFaded) {
+  VoxelGrid grid;
+  grid.size = {17, 13, 11};
+  grid.axes = Vec3(0.5e-3, 0.7e-3, 0.9e-3).asDiagonal();
+  GridField field;
+  field.values.assign(static_cast<std::size_t>(grid.count()), Vec3::Zero());
+  field.inside_body.assign(field.values.size(), 0);
+  std::vector<std::int64_t> inside;
+  for (std::int64_t k = 0; k < grid.size[2]; ++k)
+    for (std::int64_t j = 0; j < grid.size[1]; ++j)
+      for (std::int64_t i = 0; i < grid.size[0]; ++i) {
+        const bool l_shape = (i >= 3 && i <= 8 && j >= 2 && j <= 4 && k >= 2 && k <= 6) ||
+                             (i >= 3 && i <= 4 && j >= 2 && j <= 9 && k >= 2 && k <= 6);
+        const bool blob = (i - 13) * (i - 13) + (j - 9) * (j - 9) + (k - 8) * (k - 8) <= 4;
+        if (!l_shape && !blob) continue;
+        const auto v = grid.index(i, j, k);
+        field.inside_body[static_cast<std::size_t>(v)] = 1;
+        field.values[static_cast<std::size_t>(v)] = 1e-4 * Vec3(double(i), double(2 * j), double(3 * k + 1));
+        inside.push_back(v);
+      }
+  const GridField before = field;
+  const double decay = 4e-3;
+  extend_outside(grid, decay, field);
+  int faded = 0, beyond = 0;
+  for (std::int64_t k = 0; k < grid.size[2]; ++k)
+    for (std::int64_t j = 0; j < grid.size[1]; ++j)
+      for (std::int64_t i = 0; i < grid.size[0]; ++i) {
+        const auto v = static_cast<std::size_t>(grid.index(i, j, k));
+        if (before.inside_body[v]) {
+          ASSERT_EQ(field.values[v], before.values[v]);
+          continue;
+        }
+        double least = std::numeric_limits<double>::infinity();
+        for (const std::int64_t w : inside)
+          least = std::min(least, (grid.centre(i, j, k) - grid.centre(w % 17, (w / 17) % 13, w / (17 * 13))).norm());
+        const double t = least / decay;
+        if (t >= 1.0) {
+          ASSERT_EQ(field.values[v], Vec3::Zero()) << i << " " << j << " " << k;
+          ++beyond;
+          continue;
+        }
+        const double weight = 1.0 - t * t * (3.0 - 2.0 * t);
+        bool matched = false;  // some voxel inside at the least distance gives the value
+        for (const std::int64_t w : inside) {
+          const double d = (grid.centre(i, j, k) - grid.centre(w % 17, (w / 17) % 13, w / (17 * 13))).norm();
+          if (d <= least * (1.0 + 1e-12) &&
+              (field.values[v] - weight * before.values[static_cast<std::size_t>(w)]).norm() < 1e-15)
+            matched = true;
+        }
+        ASSERT_TRUE(matched) << "voxel " << i << " " << j << " " << k << " at " << least << " m";
+        ++faded;
+      }
+  EXPECT_GT(faded, 500);
+  EXPECT_GT(beyond, 10);
 }
 
 }  // namespace

@@ -41,10 +41,10 @@ GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, Fie
                                PluginCatalog& catalog, double tolerance = 1e-9);
 
 // Outside the body, each voxel takes the value of its nearest voxel inside, times s(t) = 1 - 3 t^2 + 2 t^3 of
-// t = distance / `decay` (m): continuous at the surface, smooth, zero from `decay` on. The nearest voxel is found by
-// propagating nearest-voxel labels over the 26 neighbours in one forward and one backward sweep (Danielsson's vector
-// propagation), exact to a fraction of a voxel. x + d(x) stays one-to-one outside while `decay` exceeds 1.5 times
-// the largest value at the surface (the largest slope of s is 1.5). Returns that largest value (m).
+// t = distance / `decay` (m): continuous at the surface, smooth, zero from `decay` on. The nearest voxel is exact (the
+// Euclidean distance transform with its sites, one pass per index axis). x + d(x) stays one-to-one outside while
+// `decay` exceeds 1.5 times the largest value at the surface (the largest slope of s is 1.5). Returns that largest
+// value (m).
 double extend_outside(const VoxelGrid& grid, double decay, GridField& field);
 
 }  // namespace mtled
