@@ -211,6 +211,8 @@ namespace {
 struct Envelope {
   std::vector<std::int64_t> roots;
   std::vector<double> bounds;
+  std::vector<double> values;       // the line's values before the transform, reused from line to line
+  std::vector<std::int64_t> sites;  // and their sites
 
   void transform(std::vector<double>& f, std::vector<std::int64_t>& site, double h) {
     const auto n = static_cast<std::int64_t>(f.size());
@@ -233,8 +235,8 @@ struct Envelope {
       bounds.push_back(s);  // this parabola is lowest from s on
     }
     if (roots.empty()) return;
-    const std::vector<double> values = f;
-    const std::vector<std::int64_t> sites = site;
+    values.assign(f.begin(), f.end());
+    sites.assign(site.begin(), site.end());
     std::size_t k = 0;
     for (std::int64_t p = 0; p < n; ++p) {
       while (k + 1 < roots.size() && bounds[k + 1] <= double(p)) ++k;
@@ -269,19 +271,19 @@ double extend_outside(const VoxelGrid& grid, double decay, GridField& field) {
     {
       Envelope envelope;
       std::vector<double> line(static_cast<std::size_t>(length));
-      std::vector<std::int64_t> sites(line.size());
+      std::vector<std::int64_t> line_sites(line.size());
 #pragma omp for collapse(2) schedule(static)
       for (std::int64_t y = 0; y < n[std::size_t(b)]; ++y)
         for (std::int64_t x = 0; x < n[std::size_t(a)]; ++x) {
           const std::int64_t first = x * stride[a] + y * stride[b];
           for (std::int64_t p = 0; p < length; ++p) {
             line[std::size_t(p)] = distance2[std::size_t(first + p * stride[axis])];
-            sites[std::size_t(p)] = nearest[std::size_t(first + p * stride[axis])];
+            line_sites[std::size_t(p)] = nearest[std::size_t(first + p * stride[axis])];
           }
-          envelope.transform(line, sites, spacing[axis]);
+          envelope.transform(line, line_sites, spacing[axis]);
           for (std::int64_t p = 0; p < length; ++p) {
             distance2[std::size_t(first + p * stride[axis])] = line[std::size_t(p)];
-            nearest[std::size_t(first + p * stride[axis])] = sites[std::size_t(p)];
+            nearest[std::size_t(first + p * stride[axis])] = line_sites[std::size_t(p)];
           }
         }
     }
