@@ -7,6 +7,8 @@
 #include <stdexcept>
 
 #include "mtled/analysis/mls_transfer.hpp"
+#include "mtled/log.hpp"
+#include "mtled/scope_timer.hpp"
 
 namespace mtled {
 
@@ -80,7 +82,7 @@ void rasterize_all(const VoxelGrid& grid, const std::vector<Vec3>& points,
 }
 
 void forward(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, GridField& out) {
-  std::vector<char>& inside = out.inside_body;
+  auto& inside = out.inside_body;
   rasterize_all(grid, body.nodes, body.tets, [&](std::uint32_t, std::int64_t v, const std::array<double, 4>&) {
     inside[static_cast<std::size_t>(v)] = 1;
   });
@@ -98,26 +100,43 @@ void forward(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& tr
   out.inside = count;
 }
 
+// Where tet t's linear map takes the moved point x back: the reference point with x's barycentric coordinates in the
+// moved tet (computed as rasterize() computes them, so the same bits).
+Vec3 reference_point(const BodyState& body, const std::vector<Vec3>& moved, std::uint32_t t, const Vec3& x) {
+  const auto at = vertices(moved, body.tets[t]);
+  const auto reference = vertices(body.nodes, body.tets[t]);
+  Mat3 edges;
+  for (int c = 0; c < 3; ++c) edges.col(c) = at[static_cast<std::size_t>(c) + 1] - at[0];
+  const Vec3 b = edges.inverse() * (x - at[0]);
+  return (1.0 - b.sum()) * reference[0] + b[0] * reference[1] + b[1] * reference[2] + b[2] * reference[3];
+}
+
 void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, double tolerance,
                 GridField& out) {
   std::vector<Vec3> moved(body.nodes.size());
   for (std::size_t n = 0; n < moved.size(); ++n) moved[n] = body.nodes[n] + body.displacement[n];
-  // Per voxel: the first moved tet found around its centre, and where that tet's linear map takes it back.
-  constexpr Index kNone = -1;
-  std::vector<Index> found(static_cast<std::size_t>(grid.count()), kNone);
-  std::vector<Vec3> start(found.size());
-  std::vector<char> folded(found.size(), 0);
+  // Per voxel: the first moved tet found around its centre (its linear map gives Newton's first guess), and whether
+  // another moved tet holds the centre too with a different reference point.
+  constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+  if (body.tets.size() >= kNone) throw std::invalid_argument("displacement_on_grid: 2^32 tets or more");
+  LargeVector<std::uint32_t> found(static_cast<std::size_t>(grid.count()), kNone);
+  LargeVector<char> folded(found.size(), 0);
+  const auto centre_of = [&](std::int64_t v) {
+    return grid.centre(v % grid.size[0], (v / grid.size[0]) % grid.size[1], v / (grid.size[0] * grid.size[1]));
+  };
+  PhaseLog phases;
   rasterize_all(grid, moved, body.tets, [&](std::uint32_t t, std::int64_t v, const std::array<double, 4>& b) {
-    const auto reference = vertices(body.nodes, body.tets[t]);
     const auto s = static_cast<std::size_t>(v);
-    const Vec3 X = b[0] * reference[0] + b[1] * reference[1] + b[2] * reference[2] + b[3] * reference[3];
     if (found[s] == kNone) {
-      found[s] = static_cast<Index>(t);
-      start[s] = X;
-    } else if ((X - start[s]).norm() > 1e-6 * (reference[1] - reference[0]).norm()) {
-      folded[s] = 1;  // two moved tets hold the point with different reference points: not a shared face
+      found[s] = t;
+      return;
     }
+    const auto reference = vertices(body.nodes, body.tets[t]);
+    const Vec3 X = b[0] * reference[0] + b[1] * reference[1] + b[2] * reference[2] + b[3] * reference[3];
+    if ((X - reference_point(body, moved, found[s], centre_of(v))).norm() > 1e-6 * (reference[1] - reference[0]).norm())
+      folded[s] = 1;  // two moved tets hold the point with different reference points: not a shared face
   });
+  phases.lap("voxel centres found in the moved tets");
   std::int64_t inside = 0, overlapping = 0, not_converged = 0;
   double largest = 0.0;
 #pragma omp parallel for schedule(dynamic) reduction(+ : inside, overlapping, not_converged) reduction(max : largest)
@@ -145,12 +164,13 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
         };
         // Newton's method on X + u(X) = x with u's MLS gradient, from the prediction along the row or else the moved
         // tet's linear map; it stops where a step no longer lowers the residual (a point the moved tets fold over).
-        Vec3 X = have_last ? Vec3(last_X + last_jacobian.partialPivLu().solve(x - last_x)) : start[v];
+        Vec3 X = have_last ? Vec3(last_X + last_jacobian.partialPivLu().solve(x - last_x))
+                           : reference_point(body, moved, found[v], x);
         Vec3 r;
         try {
           r = residual(X, jacobian);
         } catch (const std::runtime_error&) {  // a prediction out of the cloud
-          X = start[v];
+          X = reference_point(body, moved, found[v], x);
           r = residual(X, jacobian);
         }
         for (int iteration = 0; iteration < 30 && r.norm() > tolerance; ++iteration) {
@@ -181,6 +201,7 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
         last_jacobian = jacobian;
       }
     }
+  phases.lap("X + u(X) = x solved at each of them");
   out.inside = inside;
   out.overlapping = overlapping;
   out.not_converged = not_converged;
@@ -195,7 +216,9 @@ GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, Fie
   GridField out;
   out.values.assign(static_cast<std::size_t>(grid.count()), Vec3::Zero());
   out.inside_body.assign(out.values.size(), 0);
+  PhaseLog phases;
   const MlsTransfer transfer(body.nodes, catalog);
+  phases.lap("the nodes' supports binned");
   if (direction == FieldDirection::forward)
     forward(body, grid, transfer, out);
   else
@@ -256,8 +279,8 @@ double extend_outside(const VoxelGrid& grid, double decay, GridField& field) {
   constexpr std::int64_t kNone = -1;
   // Per voxel, the squared distance to the nearest voxel inside and that voxel, exact: one pass along each index
   // axis, each line on its own (so the lines go in parallel).
-  std::vector<double> distance2(static_cast<std::size_t>(count), std::numeric_limits<double>::infinity());
-  std::vector<std::int64_t> nearest(distance2.size(), kNone);
+  LargeVector<double> distance2(static_cast<std::size_t>(count), std::numeric_limits<double>::infinity());
+  LargeVector<std::int64_t> nearest(distance2.size(), kNone);
   for (std::int64_t v = 0; v < count; ++v)
     if (field.inside_body[static_cast<std::size_t>(v)]) {
       distance2[static_cast<std::size_t>(v)] = 0.0;

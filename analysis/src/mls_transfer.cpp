@@ -26,18 +26,24 @@ std::shared_ptr<ShapeFunctions> linear_mls(PluginCatalog& catalog) {
 
 MlsTransfer::MlsTransfer(const std::vector<Vec3>& nodes, PluginCatalog& catalog)
     : nodes_(nodes), mls_(linear_mls(catalog)), search_(nodes), radius_(nodes.size()) {
-  std::vector<Index> nearest;
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    search_.nearest(nodes[i], kNeighbours + 1, nearest);  // the node itself comes first
-    radius_[i] = 1.3 * (nodes[static_cast<std::size_t>(nearest.back())] - nodes[i]).norm();
+#pragma omp parallel
+  {
+    std::vector<Index> nearest;
+#pragma omp for schedule(static)
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      search_.nearest(nodes[i], kNeighbours + 1, nearest);  // the node itself comes first
+      radius_[i] = 1.3 * (nodes[static_cast<std::size_t>(nearest.back())] - nodes[i]).norm();
+    }
   }
   fill_bins();
 }
 
 void MlsTransfer::fill_bins() {
   if (nodes_.empty()) return;
-  // Bins of half the median support radius (a bin then lists about three times the nodes a point's support holds),
-  // over the box the supports cover; at most about 2^24 of them.
+  if (nodes_.size() >= std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("MlsTransfer: 2^32 nodes or more");
+  // Bins of a third of the median support radius, over the box the supports cover, at most about 2^24 of them; a bin
+  // lists the nodes whose support sphere reaches it, about 1.5 times the nodes a point's support holds.
   std::vector<double> sorted = radius_;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -45,10 +51,21 @@ void MlsTransfer::fill_bins() {
     lo = lo.cwiseMin(nodes_[i] - Vec3::Constant(radius_[i]));
     hi = hi.cwiseMax(nodes_[i] + Vec3::Constant(radius_[i]));
   }
-  bin_size_ = std::max(0.5 * sorted[sorted.size() / 2], std::cbrt((hi - lo).prod() / double(1 << 24)));
+  bin_size_ = std::max(sorted[sorted.size() / 2] / 3.0, std::cbrt((hi - lo).prod() / double(1 << 24)));
   if (!(bin_size_ > 0.0)) bin_size_ = std::max(1e-12, (hi - lo).maxCoeff());
   bins_origin_ = lo;
   for (int a = 0; a < 3; ++a) bins_[static_cast<std::size_t>(a)] = std::int64_t((hi[a] - lo[a]) / bin_size_) + 1;
+  // Whether node i's support sphere reaches the bin: the distance from the node to the bin's nearest point.
+  const auto reaches = [&](std::size_t i, const std::array<std::int64_t, 3>& bin) {
+    double distance2 = 0.0;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const double low = lo[static_cast<Index>(a)] + double(bin[a]) * bin_size_;
+      const double gap =
+          std::max({low - nodes_[i][static_cast<Index>(a)], 0.0, nodes_[i][static_cast<Index>(a)] - (low + bin_size_)});
+      distance2 += gap * gap;
+    }
+    return distance2 <= radius_[i] * radius_[i];
+  };
   const auto each_bin = [&](std::size_t i, auto&& visit) {
     std::array<std::int64_t, 3> first{}, last{};
     for (std::size_t a = 0; a < 3; ++a) {
@@ -58,7 +75,8 @@ void MlsTransfer::fill_bins() {
     }
     for (std::int64_t k = first[2]; k <= last[2]; ++k)
       for (std::int64_t j = first[1]; j <= last[1]; ++j)
-        for (std::int64_t b = first[0]; b <= last[0]; ++b) visit(b + bins_[0] * (j + bins_[1] * k));
+        for (std::int64_t b = first[0]; b <= last[0]; ++b)
+          if (reaches(i, {b, j, k})) visit(b + bins_[0] * (j + bins_[1] * k));
   };
   // The nodes packed (position, squared radius) in the order of their own bins, so that a bin's list reads nearby
   // memory.
@@ -83,7 +101,7 @@ void MlsTransfer::fill_bins() {
   std::vector<std::int64_t> next(bin_start_.begin(), bin_start_.end() - 1);
   for (std::size_t p = 0; p < order.size(); ++p)
     each_bin(std::size_t(order[p]),
-             [&](std::int64_t b) { bin_nodes_[std::size_t(next[std::size_t(b)]++)] = static_cast<Index>(p); });
+             [&](std::int64_t b) { bin_nodes_[std::size_t(next[std::size_t(b)]++)] = static_cast<std::uint32_t>(p); });
 }
 
 std::int64_t MlsTransfer::bin_of(const Vec3& x) const {
@@ -105,51 +123,57 @@ Vec3 MlsTransfer::at(const Vec3& x, const std::vector<Vec3>& values, Mat3& gradi
 Vec3 MlsTransfer::evaluate(const Vec3& x, const std::vector<Vec3>& values, Mat3* gradient) const {
   // Per-thread scratch: the field on an image grid calls this millions of times.
   struct Scratch {
-    std::vector<Index> support;
-    std::vector<Vec3> coordinates, gradients;
-    std::vector<double> radii, shape;
+    std::vector<Vec3> coordinates, node_values;
+    std::vector<double> radii;
+    std::vector<Index> nearest;
   };
   thread_local Scratch scratch;
-  auto& [support, coordinates, gradients, radii, shape] = scratch;
-  support.clear();
-  coordinates.clear();
-  radii.clear();
+  auto& [coordinates, node_values, radii, nearest] = scratch;
+  std::size_t count = 0;
   if (const std::int64_t b = bin_of(x); b >= 0) {
-    const Index* listed = bin_nodes_.data() + bin_start_[std::size_t(b)];
-    const Index* end = bin_nodes_.data() + bin_start_[std::size_t(b) + 1];
+    const std::uint32_t* listed = bin_nodes_.data() + bin_start_[std::size_t(b)];
+    const std::uint32_t* end = bin_nodes_.data() + bin_start_[std::size_t(b) + 1];
+    // Room for every listed node, written through plain pointers: no size bookkeeping per node.
+    const auto listed_count = static_cast<std::size_t>(end - listed);
+    if (coordinates.size() < listed_count) {
+      coordinates.resize(listed_count);
+      node_values.resize(listed_count);
+      radii.resize(listed_count);
+    }
+    Vec3* to_coordinates = coordinates.data();
+    Vec3* to_values = node_values.data();
+    double* to_radii = radii.data();
     for (; listed != end; ++listed) {
-      const Eigen::Vector4d& node = packed_[static_cast<std::size_t>(*listed)];
+      const auto p = static_cast<std::size_t>(*listed);
+      const Eigen::Vector4d& node = packed_[p];
       const double distance2 = (node.head<3>() - x).squaredNorm();
       if (distance2 < node[3]) {
-        support.push_back(packed_node_[static_cast<std::size_t>(*listed)]);
-        coordinates.push_back(node.head<3>());
-        radii.push_back(std::sqrt(std::max(node[3], 1.0201 * distance2)));  // as below: at least 1.01 |x_I - x|
+        to_coordinates[count] = node.head<3>();
+        to_values[count] = values[static_cast<std::size_t>(packed_node_[p])];
+        to_radii[count] = std::sqrt(std::max(node[3], 1.0201 * distance2));  // as below: at least 1.01 |x_I - x|
+        ++count;
       }
     }
   }
-  if (static_cast<int>(support.size()) < mls_->minimum_support_size()) {
-    search_.nearest(x, 2 * kNeighbours, support);  // outside the cloud (a coarser boundary): the nearest nodes
-    coordinates.clear();
-    radii.clear();
-    for (Index i : support) {
-      coordinates.push_back(nodes_[static_cast<std::size_t>(i)]);
-      radii.push_back(
-          std::max(radius_[static_cast<std::size_t>(i)], 1.01 * (nodes_[static_cast<std::size_t>(i)] - x).norm()));
+  if (static_cast<int>(count) < mls_->minimum_support_size()) {
+    search_.nearest(x, 2 * kNeighbours, nearest);  // outside the cloud (a coarser boundary): the nearest nodes
+    coordinates.resize(std::max(coordinates.size(), nearest.size()));
+    node_values.resize(coordinates.size());
+    radii.resize(coordinates.size());
+    count = nearest.size();
+    for (std::size_t k = 0; k < count; ++k) {
+      const auto node = static_cast<std::size_t>(nearest[k]);
+      coordinates[k] = nodes_[node];
+      node_values[k] = values[node];
+      radii[k] = std::max(radius_[node], 1.01 * (nodes_[node] - x).norm());
     }
   }
-  shape.resize(support.size());
-  gradients.resize(gradient != nullptr ? support.size() : 0);
-  if (!mls_->evaluate(x, coordinates, radii, shape, gradients).ok)
+  Vec3 out;
+  if (!mls_->interpolate(x, std::span(coordinates).first(count), std::span(radii).first(count),
+                         std::span(node_values).first(count), out, gradient)
+           .ok)
     throw std::runtime_error(
         fmt::format("cannot interpolate at ({:g}, {:g}, {:g}): degenerate neighbourhood", x[0], x[1], x[2]));
-  Vec3 out = Vec3::Zero();
-  Mat3 sum = Mat3::Zero();
-  for (std::size_t k = 0; k < support.size(); ++k) {
-    const Vec3& value = values[static_cast<std::size_t>(support[k])];
-    out += shape[k] * value;
-    if (gradient != nullptr) sum.noalias() += value * gradients[k].transpose();
-  }
-  if (gradient != nullptr) *gradient = sum;
   return out;
 }
 

@@ -54,14 +54,10 @@ struct FieldRequest {
 // The resampling field's X + u(X) = x is solved to a thousandth of a voxel: a point read that far off moves an
 // interpolated value by a thousandth of the step between neighbouring voxels.
 GridField field_on_image(const FieldRequest& request, const std::vector<fs::path>& plugin_paths) {
-  auto phase = std::chrono::steady_clock::now();
-  const auto lap = [&](const char* what) {
-    log().debug("{}: {:.2f} s", what, seconds_since(phase));
-    phase = std::chrono::steady_clock::now();
-  };
+  PhaseLog phases;
   const fs::path file = result_file_of(request.run);
   const ResultField result = read_result_vtu(file);
-  lap("the run's result read");
+  phases.lap("the run's result read");
   const std::string frame = result_frame(result, request.frame, file);
   const Image& image = request.image;
   if (image.space.empty())
@@ -76,7 +72,7 @@ GridField field_on_image(const FieldRequest& request, const std::vector<fs::path
   PluginCatalog catalog(plugin_search_path(plugin_paths, {}));
   GridField field = displacement_on_grid({result.points, result.tets, result.displacement}, grid, request.direction,
                                          catalog, 1e-3 * image.grid.spacing().minCoeff());
-  lap("the field inside the body");
+  phases.lap("the field inside the body");
   if (field.inside == 0)
     throw InputError(image.source, fmt::format("space origin / space directions: no voxel centre of the {}x{}x{} grid "
                                                "lies inside the run's body ({}): the image and the run do not overlap; "
@@ -87,7 +83,7 @@ GridField field_on_image(const FieldRequest& request, const std::vector<fs::path
   if (request.decay_mm > 0.0) {
     const double decay = 1e-3 * request.decay_mm;
     const double largest = extend_outside(image.grid, decay, field);
-    lap("the field outside the body");
+    phases.lap("the field outside the body");
     if (decay < 1.5 * largest)
       log().warn(
           "--decay {} mm is under 1.5 times the largest displacement at the surface ({:.3g} mm): outside the "
@@ -149,7 +145,9 @@ int field_command(const FieldOptions& options, const std::vector<fs::path>& plug
                                                 options.direction));
   (void)is_nifti_name(options.output);  // a name of no image format fails before any work
   const auto start = std::chrono::steady_clock::now();
+  PhaseLog phases;
   Image image = options.like.empty() ? given_grid(options) : read_image(options.like);
+  phases.lap("the grid read");
   const FieldDirection direction =
       options.direction == "forward" ? FieldDirection::forward : FieldDirection::resampling;
   const GridField field =
@@ -158,14 +156,18 @@ int field_command(const FieldOptions& options, const std::vector<fs::path>& plug
   out.grid = image.grid;
   out.space = image.space;
   out.components = 3;
-  out.values.reserve(3 * field.values.size());
-  for (const Vec3& v : field.values) out.values.insert(out.values.end(), v.data(), v.data() + 3);
+  out.values.resize(3 * field.values.size());
+#pragma omp parallel for schedule(static)
+  for (std::size_t v = 0; v < field.values.size(); ++v)
+    for (std::size_t c = 0; c < 3; ++c) out.values[3 * v + c] = field.values[v][static_cast<Index>(c)];
+  phases.lap("the field laid out as an image");
   create_parent(options.output);
   // Slicer reads a NRRD field as a resampling transform unless it says otherwise.
   write_image(options.output, out,
               direction == FieldDirection::forward
                   ? std::map<std::string, std::string>{{"displacement field type", "modeling"}}
                   : std::map<std::string, std::string>{});
+  phases.lap("the field written");
   log().info("{} displacement field on {}x{}x{} voxels of {}: {} inside the body, written to {} ({:.2f} s)",
              options.direction, image.grid.size[0], image.grid.size[1], image.grid.size[2], image.source, field.inside,
              options.output.string(), seconds_since(start));

@@ -21,6 +21,22 @@ namespace mtled {
 // Key functions: the interfaces' type information lives in libmtled_core only.
 MeshSource::~MeshSource() = default;
 ShapeFunctions::~ShapeFunctions() = default;
+ShapeFunctionFit ShapeFunctions::interpolate(const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                                             std::span<const Vec3> node_values, Vec3& value, Mat3* gradient) const {
+  thread_local std::vector<double> values;
+  thread_local std::vector<Vec3> gradients;
+  values.resize(nodes.size());
+  gradients.resize(gradient != nullptr ? nodes.size() : 0);
+  value.setZero();
+  if (gradient != nullptr) gradient->setZero();
+  const ShapeFunctionFit fit = evaluate(x, nodes, radii, values, gradients);
+  if (!fit.ok) return fit;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    value += values[i] * node_values[i];
+    if (gradient != nullptr) gradient->noalias() += node_values[i] * gradients[i].transpose();
+  }
+  return fit;
+}
 Material::~Material() = default;
 Driver::~Driver() = default;
 bool Driver::nodes_read(const LoadState&, const ModelView&, std::vector<Index>&) const { return false; }

@@ -46,8 +46,9 @@ double value_at(const char* p, VoxelType type, bool swap) {
 
 }  // namespace
 
-std::vector<double> decode(const char* data, std::int64_t count, VoxelType type, bool swap) {
-  std::vector<double> values(static_cast<std::size_t>(count));
+LargeVector<double> decode(const char* data, std::int64_t count, VoxelType type, bool swap) {
+  LargeVector<double> values(static_cast<std::size_t>(count));
+#pragma omp parallel for schedule(static)
   for (std::int64_t v = 0; v < count; ++v)
     values[static_cast<std::size_t>(v)] = value_at(data + v * type.bytes, type, swap);
   return values;

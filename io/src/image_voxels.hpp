@@ -10,7 +10,7 @@
 namespace mtled::image_voxels {
 
 // `count` values of `type` from `data` (at least count * bytes long; byte order swapped when `swap`).
-std::vector<double> decode(const char* data, std::int64_t count, VoxelType type, bool swap);
+LargeVector<double> decode(const char* data, std::int64_t count, VoxelType type, bool swap);
 
 // Checks the grid: positive sizes (at most 2^31 voxels in all), finite origin, axes not singular and orthogonal to
 // 1e-4 (a sheared grid cannot be meshed as a rotated box); InputError naming `source` and `field`.

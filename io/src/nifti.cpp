@@ -165,9 +165,9 @@ Image parse_nifti(const std::string& bytes, const std::string& source) {
     throw InputError(source, fmt::format("the voxel data is truncated: {} values of {} bytes from vox_offset {} need "
                                          "{} bytes, the file has {}", count, type.bytes, offset,
                                          offset + count * type.bytes, bytes.size()));
-  const std::vector<double> stored = image_voxels::decode(bytes.data() + offset, count, type, swap);
+  LargeVector<double> stored = image_voxels::decode(bytes.data() + offset, count, type, swap);
   if (image.components == 1) {
-    image.values = stored;
+    image.values = std::move(stored);
     return image;
   }
   // One component volume after another in the file; components fastest here. Displacements are lengths.

@@ -48,6 +48,11 @@ class MlsShapeFunctions final : public ShapeFunctions {
     return shapefunctions::evaluate_moving_least_squares(settings_, x, nodes, radii, values, gradients);
   }
 
+  ShapeFunctionFit interpolate(const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                               std::span<const Vec3> node_values, Vec3& value, Mat3* gradient) const override {
+    return shapefunctions::interpolate_moving_least_squares(settings_, x, nodes, radii, node_values, value, gradient);
+  }
+
  private:
   double dilatation_;
   shapefunctions::MovingLeastSquaresSettings settings_;

@@ -46,6 +46,11 @@ class MmlsShapeFunctions final : public ShapeFunctions {
     return shapefunctions::evaluate_moving_least_squares(settings_, x, nodes, radii, values, gradients);
   }
 
+  ShapeFunctionFit interpolate(const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                               std::span<const Vec3> node_values, Vec3& value, Mat3* gradient) const override {
+    return shapefunctions::interpolate_moving_least_squares(settings_, x, nodes, radii, node_values, value, gradient);
+  }
+
  private:
   static constexpr double kDefaultDilatation = 1.8;
   static constexpr double kDefaultPenalty = 1e-2;

@@ -67,26 +67,33 @@ BasisVector<M> quadratic_part(const BasisVector<M>& v) {
   return result;
 }
 
-// Derivatives. The shape functions do not depend on where the local basis is centred: for plain MLS any
-// shift or scaling of a complete polynomial basis is an invertible linear map that cancels in
-// p^T A^{-1} B, and the MMLS penalty acts on the quadratic coefficients, which a shift of the origin leaves
-// unchanged. So we may differentiate with the origin frozen at x0 = x and the scale frozen at s0 = s(x0):
-// then p(xi_I) is constant, dp(0)/dx_k = e_{1+k} / s0, and
-//   A_k = sum_I w_I,k p_I p_I^T + mu_k D,   c = A^{-1} p(0),   gamma_k = A^{-1} (e_{1+k} / s0 - A_k c),
-//   N_I,k = w_I gamma_k^T p_I + w_I,k c^T p_I.
-// The scale does matter to MMLS (quadratic coefficients grow as s^2), so the penalty seen in the frozen frame
-// is mu(x) = m^2 W(x) (s(x) / s0)^4, whose derivative at x0 is m^2 (W_k + 4 W s_k / s0).
+// A node's weight and (only where the weight is not zero) its basis vector, computed once per point and kept for the
+// passes that follow (one buffer per thread, reused from point to point).
 template <int M>
-ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
-                     std::span<double> values, std::span<Vec3> gradients) {
+struct NodeTerms {
+  NodeWeight weight;
+  BasisVector<M> p;
+};
+
+// What one point's fit needs besides the node terms: the local scale and the MMLS penalty, the factorised moment
+// matrix, and c = A^{-1} p(0).
+template <int M>
+struct MomentFit {
+  double inverse_scale = 0.0;
+  double mu = 0.0;
+  Vec3 mu_gradient = Vec3::Zero();
+  Eigen::LDLT<MomentMatrix<M>> factor;
+  BasisVector<M> c = BasisVector<M>::Zero();
+  ShapeFunctionFit status;
+};
+
+// The weights, the scale, the moment matrix and its factorisation at x (see evaluate_moving_least_squares); status.ok
+// is false where no node reaches x or A is singular or too ill-conditioned.
+template <int M>
+MomentFit<M> fit_moments(double penalty, const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                         std::vector<NodeTerms<M>>& terms) {
   const std::size_t n = nodes.size();
-  // Each node's weight and (below, only where the weight is not zero) basis vector, computed once and kept for the
-  // passes that follow (one buffer per thread, reused from point to point).
-  struct NodeTerms {
-    NodeWeight weight;
-    BasisVector<M> p;
-  };
-  thread_local std::vector<NodeTerms> terms;
+  MomentFit<M> out;
   terms.resize(n);
   // The scale s is the weight-averaged support radius: close to the support size, so the scaled coordinates
   // of the nodes that count are O(1) and A is well scaled whatever the units and position; and smooth in x,
@@ -100,47 +107,82 @@ ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes,
     total_weight_gradient += weight.gradient;
     weighted_radius_gradient += radii[i] * weight.gradient;
   }
-  if (!(total_weight > 0.0) || !std::isfinite(weighted_radius)) return {};
+  if (!(total_weight > 0.0) || !std::isfinite(weighted_radius)) return out;
   const double scale = weighted_radius / total_weight;
-  const double inverse_scale = 1.0 / scale;
+  out.inverse_scale = 1.0 / scale;
   const Vec3 scale_gradient = (weighted_radius_gradient - scale * total_weight_gradient) / total_weight;
   // Relative to the total weight, the penalty means the same for sparse and dense supports.
   const double m2 = penalty * penalty;
-  const double mu = m2 * total_weight;
-  const Vec3 mu_gradient = m2 * (total_weight_gradient + (4.0 * total_weight * inverse_scale) * scale_gradient);
+  out.mu = m2 * total_weight;
+  out.mu_gradient = m2 * (total_weight_gradient + (4.0 * total_weight * out.inverse_scale) * scale_gradient);
 
   MomentMatrix<M> moment = MomentMatrix<M>::Zero();
   for (std::size_t i = 0; i < n; ++i) {
     if (terms[i].weight.w == 0.0) continue;
-    const BasisVector<M>& p = terms[i].p = basis_at<M>(inverse_scale * (nodes[i] - x));
-    moment.noalias() += terms[i].weight.w * p * p.transpose();
-  }
-  if constexpr (M > 4) moment.diagonal().template tail<M - 4>().array() += mu;
-
-  const Eigen::LDLT<MomentMatrix<M>> factor(moment);
-  if (factor.info() != Eigen::Success || !(factor.vectorD().minCoeff() > 0.0)) return {false, 0.0};
-  const double reciprocal_condition = factor.rcond();
-  if (!std::isfinite(reciprocal_condition)) return {false, 0.0};
-  if (reciprocal_condition < kMinimumReciprocalCondition) return {false, reciprocal_condition};
-
-  const BasisVector<M> c = factor.solve(BasisVector<M>::Unit(0));
-  Eigen::Matrix<double, M, 3> gamma = Eigen::Matrix<double, M, 3>::Zero();
-  const bool with_gradients = !gradients.empty();
-  if (with_gradients) {
-    Eigen::Matrix<double, M, 3> rhs = Eigen::Matrix<double, M, 3>::Zero();
-    rhs.template block<3, 3>(1, 0).diagonal().setConstant(inverse_scale);
-    // A_k c without forming A_k: sum_I w_I,k p_I (p_I . c) + mu_k D c.
-    for (std::size_t i = 0; i < n; ++i) {
-      if (terms[i].weight.w == 0.0) continue;
-      const BasisVector<M>& p = terms[i].p;
-      rhs.noalias() -= (p.dot(c) * p) * terms[i].weight.gradient.transpose();
+    const Vec3 xi = out.inverse_scale * (nodes[i] - x);
+    terms[i].p = basis_at<M>(xi);
+    if constexpr (M == 4) {
+      // The same products as below, from xi in registers: reading p back from memory just after writing it element by
+      // element stalls (a load that straddles two stores cannot be forwarded), and this loop runs per node per point.
+      const double w = terms[i].weight.w;
+      const Vec3 w_xi = w * xi;
+      moment(0, 0) += w;
+      moment.template block<3, 1>(1, 0) += w_xi;
+      moment.template block<3, 3>(1, 1).noalias() += w_xi * xi.transpose();
+    } else {
+      moment.noalias() += terms[i].weight.w * terms[i].p * terms[i].p.transpose();
     }
-    if constexpr (M > 4) rhs.noalias() -= quadratic_part<M>(c) * mu_gradient.transpose();
-    gamma = factor.solve(rhs);
   }
+  if constexpr (M == 4) moment.template block<1, 3>(0, 1) = moment.template block<3, 1>(1, 0).transpose();
+  if constexpr (M > 4) moment.diagonal().template tail<M - 4>().array() += out.mu;
+
+  out.factor.compute(moment);
+  if (out.factor.info() != Eigen::Success || !(out.factor.vectorD().minCoeff() > 0.0)) return out;
+  const double reciprocal_condition = out.factor.rcond();
+  if (!std::isfinite(reciprocal_condition)) return out;
+  out.status.reciprocal_condition = reciprocal_condition;
+  if (reciprocal_condition < kMinimumReciprocalCondition) return out;
+  out.c = out.factor.solve(BasisVector<M>::Unit(0));
+  out.status.ok = true;
+  return out;
+}
+
+// Derivatives. The shape functions do not depend on where the local basis is centred: for plain MLS any
+// shift or scaling of a complete polynomial basis is an invertible linear map that cancels in
+// p^T A^{-1} B, and the MMLS penalty acts on the quadratic coefficients, which a shift of the origin leaves
+// unchanged. So we may differentiate with the origin frozen at x0 = x and the scale frozen at s0 = s(x0):
+// then p(xi_I) is constant, dp(0)/dx_k = e_{1+k} / s0, and
+//   A_k = sum_I w_I,k p_I p_I^T + mu_k D,   c = A^{-1} p(0),   gamma_k = A^{-1} (e_{1+k} / s0 - A_k c),
+//   N_I,k = w_I gamma_k^T p_I + w_I,k c^T p_I.
+// The scale does matter to MMLS (quadratic coefficients grow as s^2), so the penalty seen in the frozen frame
+// is mu(x) = m^2 W(x) (s(x) / s0)^4, whose derivative at x0 is m^2 (W_k + 4 W s_k / s0).
+//
+// gamma's right-hand side e_{1+k} / s0 - A_k c, with A_k c = sum_I w_I,k p_I (p_I . c) + mu_k D c formed without A_k.
+template <int M>
+Eigen::Matrix<double, M, 3> gamma_right_hand_side(const MomentFit<M>& fit, const std::vector<NodeTerms<M>>& terms) {
+  Eigen::Matrix<double, M, 3> rhs = Eigen::Matrix<double, M, 3>::Zero();
+  rhs.template block<3, 3>(1, 0).diagonal().setConstant(fit.inverse_scale);
+  for (const NodeTerms<M>& term : terms) {
+    if (term.weight.w == 0.0) continue;
+    rhs.noalias() -= (term.p.dot(fit.c) * term.p) * term.weight.gradient.transpose();
+  }
+  if constexpr (M > 4) rhs.noalias() -= quadratic_part<M>(fit.c) * fit.mu_gradient.transpose();
+  return rhs;
+}
+
+template <int M>
+ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                     std::span<double> values, std::span<Vec3> gradients) {
+  thread_local std::vector<NodeTerms<M>> terms;
+  const MomentFit<M> moments = fit_moments<M>(penalty, x, nodes, radii, terms);
+  if (!moments.status.ok) return moments.status;
+  const BasisVector<M>& c = moments.c;
+  const bool with_gradients = !gradients.empty();
+  Eigen::Matrix<double, M, 3> gamma = Eigen::Matrix<double, M, 3>::Zero();
+  if (with_gradients) gamma = moments.factor.solve(gamma_right_hand_side<M>(moments, terms));
 
   bool finite = true;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
     const NodeWeight& weight = terms[i].weight;
     if (weight.w == 0.0) continue;
     const BasisVector<M>& p = terms[i].p;
@@ -157,7 +199,37 @@ ShapeFunctionFit fit(double penalty, const Vec3& x, std::span<const Vec3> nodes,
     std::fill(gradients.begin(), gradients.end(), Vec3::Zero());
     return {false, 0.0};
   }
-  return {true, reciprocal_condition};
+  return moments.status;
+}
+
+// sum_I N_I v_I = (sum_I w_I v_I p_I^T) c and its gradient (sum_I w_I v_I p_I^T) gamma + sum_I (c . p_I) v_I w_I,k,
+// without forming each N_I: the same fit, summed in the order of the terms.
+template <int M>
+ShapeFunctionFit interpolate(double penalty, const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                             std::span<const Vec3> node_values, Vec3& value, Mat3* gradient) {
+  thread_local std::vector<NodeTerms<M>> terms;
+  const MomentFit<M> moments = fit_moments<M>(penalty, x, nodes, radii, terms);
+  if (!moments.status.ok) return moments.status;
+  Eigen::Matrix<double, 3, M> weighted = Eigen::Matrix<double, 3, M>::Zero();  // sum_I w_I v_I p_I^T
+  for (std::size_t i = 0; i < nodes.size(); ++i)
+    if (terms[i].weight.w != 0.0) weighted.noalias() += (terms[i].weight.w * node_values[i]) * terms[i].p.transpose();
+  value = weighted * moments.c;
+  bool finite = value.allFinite();
+  if (gradient != nullptr) {
+    const Eigen::Matrix<double, M, 3> gamma = moments.factor.solve(gamma_right_hand_side<M>(moments, terms));
+    Mat3 sum = weighted * gamma;
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+      if (terms[i].weight.w != 0.0)
+        sum.noalias() += (moments.c.dot(terms[i].p) * node_values[i]) * terms[i].weight.gradient.transpose();
+    *gradient = sum;
+    finite = finite && sum.allFinite();
+  }
+  if (!finite) {  // as in fit(): never let NaN out
+    value.setZero();
+    if (gradient != nullptr) gradient->setZero();
+    return {false, 0.0};
+  }
+  return moments.status;
 }
 
 }  // namespace
@@ -173,6 +245,19 @@ ShapeFunctionFit evaluate_moving_least_squares(const MovingLeastSquaresSettings&
   if (!x.allFinite()) return {};
   if (settings.basis == PolynomialBasis::linear) return fit<4>(0.0, x, nodes, radii, values, gradients);
   return fit<10>(settings.quadratic_penalty, x, nodes, radii, values, gradients);
+}
+
+ShapeFunctionFit interpolate_moving_least_squares(const MovingLeastSquaresSettings& settings, const Vec3& x,
+                                                  std::span<const Vec3> nodes, std::span<const double> radii,
+                                                  std::span<const Vec3> node_values, Vec3& value, Mat3* gradient) {
+  if (radii.size() != nodes.size() || node_values.size() != nodes.size())
+    throw std::invalid_argument("interpolate_moving_least_squares: nodes, radii and node values differ in size");
+  value.setZero();
+  if (gradient != nullptr) gradient->setZero();
+  if (!x.allFinite()) return {};
+  if (settings.basis == PolynomialBasis::linear)
+    return interpolate<4>(0.0, x, nodes, radii, node_values, value, gradient);
+  return interpolate<10>(settings.quadratic_penalty, x, nodes, radii, node_values, value, gradient);
 }
 
 void declare_support_dilatation(ComponentDeclaration& declaration, double default_value, const std::string& advice) {

@@ -38,6 +38,12 @@ ShapeFunctionFit evaluate_moving_least_squares(const MovingLeastSquaresSettings&
                                                std::span<const Vec3> nodes, std::span<const double> radii,
                                                std::span<double> values, std::span<Vec3> gradients);
 
+// value = sum_I N_I(x) node_values_I (and its gradient unless null) from the same fit, without forming each N_I.
+// Thread-safe; ok = false (value and gradient zero) where evaluate_moving_least_squares fails.
+ShapeFunctionFit interpolate_moving_least_squares(const MovingLeastSquaresSettings& settings, const Vec3& x,
+                                                  std::span<const Vec3> nodes, std::span<const double> radii,
+                                                  std::span<const Vec3> node_values, Vec3& value, Mat3* gradient);
+
 // Below this estimate of 1/cond(A) the fit is refused: solves lose about cond(A) x machine epsilon, so this
 // keeps the shape functions accurate to about 1e-6 relative (1e6 x 2.2e-16).
 constexpr double kMinimumReciprocalCondition = 2.2e-10;

@@ -141,6 +141,45 @@ TEST_P(ShapeFunctionConformance, ValuesOnlyCallAgreesWithFullCall) {
   }
 }
 
+// interpolate() reads a nodal field at x: it must be sum_I N_I v_I and sum_I v_I dN_I/dx^T of the full call, to the
+// round-off of those sums (each term is |N_I| |v_I|, with |v_I| <= 1 here), whether the component overrides it or
+// not; and where the fit is refused it is refused too, with zeros.
+TEST_P(ShapeFunctionConformance, InterpolateAgreesWithTheShapeFunctionSums) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int k = 0; k < 100; ++k) {
+    const Vec3 x = random_point(random, cloud_.lower, cloud_.upper);
+    const Support support = support_at(cloud_, x);
+    std::vector<Vec3> field(support.nodes.size());
+    for (Vec3& v : field) v = Vec3(unit(random), unit(random), unit(random));
+    const Evaluation full = evaluate(*shape_functions_, support, x, true);
+    Vec3 value = Vec3::Constant(7.0), value_only = Vec3::Constant(7.0);
+    Mat3 gradient = Mat3::Constant(7.0);
+    const ShapeFunctionFit fit =
+        shape_functions_->interpolate(x, support.nodes, support.radii, field, value, &gradient);
+    const ShapeFunctionFit fit_value_only =
+        shape_functions_->interpolate(x, support.nodes, support.radii, field, value_only, nullptr);
+    ASSERT_EQ(fit.ok, full.fit.ok);
+    ASSERT_EQ(fit_value_only.ok, full.fit.ok);
+    if (!full.fit.ok) {
+      EXPECT_EQ(value, Vec3::Zero());
+      EXPECT_EQ(gradient, Mat3::Zero());
+      continue;
+    }
+    Vec3 expected = Vec3::Zero();
+    Mat3 expected_gradient = Mat3::Zero();
+    for (std::size_t i = 0; i < field.size(); ++i) {
+      expected += full.values[i] * field[i];
+      expected_gradient += field[i] * full.gradients[i].transpose();
+    }
+    const double tolerance = roundoff_bound(full.fit, support.nodes.size());
+    EXPECT_LE((value - expected).cwiseAbs().maxCoeff(), tolerance) << "at point " << k;
+    EXPECT_LE((value_only - expected).cwiseAbs().maxCoeff(), tolerance) << "at point " << k;
+    EXPECT_LE((gradient - expected_gradient).cwiseAbs().maxCoeff(), tolerance / support.mean_radius())
+        << "at point " << k;
+  }
+}
+
 // Moving, rotating or rescaling the whole cloud (and x) must not change the values; gradients rotate with the
 // cloud and scale by 1/scale. This is what "local scaled coordinates" buys: the same answer in mm or m, near
 // the origin or far from it. The supports are spherical, so rotations must not matter either. The tolerance

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "mtled/io/image.hpp"  // VoxelGrid
+#include "mtled/io/large_buffer.hpp"
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/types.hpp"
 
@@ -20,8 +21,8 @@ namespace mtled {
 enum class FieldDirection { forward, resampling };
 
 struct GridField {
-  std::vector<Vec3> values;        // one per voxel (m), zero outside the body
-  std::vector<char> inside_body;   // one per voxel: 1 where the voxel's centre is inside the body
+  LargeVector<Vec3> values;        // one per voxel (m), zero outside the body
+  LargeVector<char> inside_body;   // one per voxel: 1 where the voxel's centre is inside the body
   std::int64_t inside = 0;         // voxels inside the (reference or moved) body
   std::int64_t overlapping = 0;    // resampling: voxels inside more than one moved tet (the body folded there)
   std::int64_t not_converged = 0;  // resampling: voxels whose X + u(X) = x was not solved to the tolerance

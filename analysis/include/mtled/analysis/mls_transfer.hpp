@@ -38,7 +38,7 @@ class MlsTransfer {
   double bin_size_ = 1.0;
   std::array<std::int64_t, 3> bins_{0, 0, 0};
   std::vector<std::int64_t> bin_start_;
-  std::vector<Index> bin_nodes_;         // positions in packed_
+  std::vector<std::uint32_t> bin_nodes_;  // positions in packed_ (a cloud has fewer than 2^32 nodes)
   std::vector<Eigen::Vector4d> packed_;  // a node's position and squared support radius, in bin order
   std::vector<Index> packed_node_;       // the node each packed_ entry is
 };

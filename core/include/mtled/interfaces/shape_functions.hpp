@@ -26,6 +26,11 @@ class ShapeFunctions {
   // at `nodes` with support radii `radii`. Returns ok = false when the moment matrix is singular.
   virtual ShapeFunctionFit evaluate(const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
                                     std::span<double> values, std::span<Vec3> gradients) const = 0;
+  // value = sum_i N_i(x) node_values[i] and, unless `gradient` is null, its gradient (rows: components): a field
+  // the nodes carry, read at x (how a run is carried onto other points or an image grid). The default sums
+  // evaluate()'s values; a provider may override it to skip forming each N_i.
+  virtual ShapeFunctionFit interpolate(const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                                       std::span<const Vec3> node_values, Vec3& value, Mat3* gradient) const;
 };
 
 }  // namespace mtled

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "mtled/io/large_buffer.hpp"
 #include "mtled/types.hpp"
 
 namespace mtled {
@@ -41,7 +42,7 @@ struct VoxelType {
 struct Image {
   VoxelGrid grid;
   int components = 1;          // 1: a scalar per voxel; 3: a vector (millimetres in the file, metres here)
-  std::vector<double> values;  // components fastest, then i, j, k
+  LargeVector<double> values;  // components fastest, then i, j, k
   VoxelType type;              // as stored; a warped image is written back in it
   std::string space;           // "RAS" or "LPS": the frame of the grid and of vector values; "" if the file has none
   std::map<std::string, std::string> key_values;  // NRRD "key:=value" pairs, kept on writing (Slicer's segments)
@@ -69,9 +70,9 @@ bool is_nifti_name(const std::filesystem::path& file);
 // LPS and RAS differ by the signs of x and y; the map is its own inverse.
 inline Mat3 lps_ras_flip() { return Vec3(-1.0, -1.0, 1.0).asDiagonal(); }
 
-// gzip (RFC 1952) of `bytes` at zlib's fastest level (images are large), with no time stamp: the same bytes for the
-// same input.
-std::string gzip(const std::string& bytes);
+// gzip (RFC 1952) of `bytes`, compressed fast (images are large: runs only, in pieces on every thread), with no time
+// stamp: the same bytes for the same input on any number of threads.
+std::string gzip(std::span<const char> bytes);
 // The bytes, gunzipped (a truncated or corrupt stream is an InputError naming `source`).
 std::string gunzip(const std::string& bytes, const std::string& source);
 
