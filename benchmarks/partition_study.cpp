@@ -65,6 +65,64 @@ int main(int argc, char** argv) {
   }
 }
 
+// What a part count costs besides the kernel's own work: the network and what crosses it each step.
+struct Exchange {
+  double latency_s, bandwidth;  // per message, bytes per second
+  double product_bytes;         // the constraint products summed over the ranks every step
+  long whole_every;             // steps between reads of the whole displacement (0: never)
+};
+
+// One table row: the partition into n parts and the step time it projects.
+void print_row(const mtled::Model& model, const Costs& costs, const Exchange& exchange, double one_rank, int n) {
+  using namespace mtled;
+  const double latency_s = exchange.latency_s, bandwidth = exchange.bandwidth;
+  const double product_bytes = exchange.product_bytes;
+  const long whole_every = exchange.whole_every;
+  const auto nodes = static_cast<double>(model.node_count());
+  const MeshPartition partition = partition_mesh(model.mesh(), n);
+  std::vector<int> point_part(static_cast<std::size_t>(model.integration_point_count()));
+  for (std::size_t p = 0; p < point_part.size(); ++p)
+    point_part[p] = partition.tet_part[static_cast<std::size_t>(model.ip_tets()[p])];
+  const PartSizes sizes = part_sizes(partition, point_part, model.ip_supports());
+  const double mean_points = static_cast<double>(model.integration_point_count()) / n;
+  const double imbalance =
+      static_cast<double>(*std::max_element(sizes.points.begin(), sizes.points.end())) / mean_points;
+  const double mean_ghosts =
+      static_cast<double>(std::accumulate(sizes.ghost_nodes.begin(), sizes.ghost_nodes.end(), std::int64_t{0})) / n;
+  const auto most_ghosts = static_cast<double>(*std::max_element(sizes.ghost_nodes.begin(), sizes.ghost_nodes.end()));
+  const int neighbours = *std::max_element(sizes.neighbours.begin(), sizes.neighbours.end());
+  const auto fewest_owned = static_cast<double>(*std::min_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
+  const double halo_bytes = 24.0 * most_ghosts, gather_bytes = 24.0 * (nodes - fewest_owned);
+  double boundary_share = 0.0;
+  for (int q = 0; q < n; ++q)
+    if (sizes.points[static_cast<std::size_t>(q)] > 0)
+      boundary_share =
+          std::max(boundary_share, static_cast<double>(sizes.boundary_points[static_cast<std::size_t>(q)]) /
+                                       static_cast<double>(sizes.points[static_cast<std::size_t>(q)]));
+  // Per evaluation, the slowest rank: the kernel over its boundary points; then its halo (one message per
+  // neighbour, the bytes over the link) while it computes its interior, whichever takes longer; then one reduction
+  // (log2 n rounds).
+  const double kernel = costs.kernel_s * imbalance / n;
+  const double halo = neighbours * latency_s + halo_bytes / bandwidth;
+  const double reduction = std::ceil(std::log2(n)) * latency_s;
+  const double evaluation = kernel * boundary_share + std::max(halo, kernel * (1.0 - boundary_share)) + reduction;
+  // Per step: the rank's own nodes' update (the most-owning rank's share), the repeated rest, and the exchanges
+  // of the step: the prediction's and the step sums' reductions and the drivers' gather (a few dozen nodes:
+  // latency), the constraint products' sum (a reduce-scatter, one message to each other rank, and a gather: twice
+  // the products' bytes), the ghost nodes' displacements (as the halo, not hidden), and the whole displacement on
+  // one step in whole_every.
+  const double most_owned = static_cast<double>(*std::max_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
+  const double update = costs.update_per_step_s * most_owned / nodes;
+  const double whole = 2.0 * std::ceil(std::log2(n)) * latency_s + gather_bytes / bandwidth;
+  const double products = (n - 1) * latency_s + reduction + 2.0 * product_bytes / bandwidth;
+  const double exchanges =
+      3.0 * reduction + products + halo + (whole_every > 0 ? whole / static_cast<double>(whole_every) : 0.0);
+  const double step = costs.evaluations_per_step * evaluation + update + costs.repeated_per_step_s + exchanges;
+  fmt::print("| {} | {:.3f} | {:.0f} / {:.0f} | {:.0f}% | {} | {:.1f} | {:.0f} | {:.3f} | {:.1f}x |\n", n, imbalance,
+             mean_ghosts, most_ghosts, 100.0 * boundary_share, neighbours, halo_bytes / 1e3, gather_bytes / 1e3,
+             step * 1e3, one_rank / step);
+}
+
 int study(int argc, char** argv) {
   using namespace mtled;
   std::vector<std::string> args(argv + 1, argv + argc);
@@ -89,7 +147,6 @@ int study(int argc, char** argv) {
   const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
   const Simulation simulation(scene, catalog);
   const Model& model = simulation.model();
-  const auto nodes = static_cast<double>(model.node_count());
   // The steps on which a monitor reads the whole displacement: the fold check's (the most frequent; the stable-step
   // estimate's are rarer), or the snapshots' when more frequent.
   // The constraint products summed over the ranks every step: 8 bytes per constrained row and component.
@@ -111,45 +168,6 @@ int study(int argc, char** argv) {
              "ms per step | speed-up |\n");
   fmt::print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   const double one_rank = costs.evaluations_per_step * costs.kernel_s + costs.update_per_step_s + costs.repeated_per_step_s;
-  for (const int n : parts) {
-    const MeshPartition partition = partition_mesh(model.mesh(), n);
-    std::vector<int> point_part(static_cast<std::size_t>(model.integration_point_count()));
-    for (std::size_t p = 0; p < point_part.size(); ++p) point_part[p] = partition.tet_part[static_cast<std::size_t>(model.ip_tets()[p])];
-    const PartSizes sizes = part_sizes(partition, point_part, model.ip_supports());
-    const double mean_points = static_cast<double>(model.integration_point_count()) / n;
-    const double imbalance = static_cast<double>(*std::max_element(sizes.points.begin(), sizes.points.end())) / mean_points;
-    const double mean_ghosts = static_cast<double>(std::accumulate(sizes.ghost_nodes.begin(), sizes.ghost_nodes.end(), std::int64_t{0})) / n;
-    const auto most_ghosts = static_cast<double>(*std::max_element(sizes.ghost_nodes.begin(), sizes.ghost_nodes.end()));
-    const int neighbours = *std::max_element(sizes.neighbours.begin(), sizes.neighbours.end());
-    const auto fewest_owned = static_cast<double>(*std::min_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
-    const double halo_bytes = 24.0 * most_ghosts, gather_bytes = 24.0 * (nodes - fewest_owned);
-    double boundary_share = 0.0;
-    for (int q = 0; q < n; ++q)
-      if (sizes.points[static_cast<std::size_t>(q)] > 0)
-        boundary_share = std::max(boundary_share, static_cast<double>(sizes.boundary_points[static_cast<std::size_t>(q)]) /
-                                                      static_cast<double>(sizes.points[static_cast<std::size_t>(q)]));
-    // Per evaluation, the slowest rank: the kernel over its boundary points; then its halo (one message per
-    // neighbour, the bytes over the link) while it computes its interior, whichever takes longer; then one reduction
-    // (log2 n rounds).
-    const double kernel = costs.kernel_s * imbalance / n;
-    const double halo = neighbours * latency_s + halo_bytes / bandwidth;
-    const double reduction = std::ceil(std::log2(n)) * latency_s;
-    const double evaluation = kernel * boundary_share + std::max(halo, kernel * (1.0 - boundary_share)) + reduction;
-    // Per step: the rank's own nodes' update (the most-owning rank's share), the repeated rest, and the exchanges
-    // of the step: the prediction's and the step sums' reductions and the drivers' gather (a few dozen nodes:
-    // latency), the constraint products' sum (a reduce-scatter, one message to each other rank, and a gather: twice
-    // the products' bytes), the ghost nodes' displacements (as the halo, not hidden), and the whole displacement on
-    // one step in whole_every.
-    const double most_owned = static_cast<double>(*std::max_element(sizes.owned_nodes.begin(), sizes.owned_nodes.end()));
-    const double update = costs.update_per_step_s * most_owned / nodes;
-    const double whole = 2.0 * std::ceil(std::log2(n)) * latency_s + gather_bytes / bandwidth;
-    const double products = (n - 1) * latency_s + reduction + 2.0 * product_bytes / bandwidth;
-    const double exchanges = 3.0 * reduction + products + halo +
-                             (whole_every > 0 ? whole / static_cast<double>(whole_every) : 0.0);
-    const double step = costs.evaluations_per_step * evaluation + update + costs.repeated_per_step_s + exchanges;
-    fmt::print("| {} | {:.3f} | {:.0f} / {:.0f} | {:.0f}% | {} | {:.1f} | {:.0f} | {:.3f} | {:.1f}x |\n", n, imbalance,
-               mean_ghosts, most_ghosts, 100.0 * boundary_share, neighbours, halo_bytes / 1e3, gather_bytes / 1e3,
-               step * 1e3, one_rank / step);
-  }
+  for (const int n : parts) print_row(model, costs, {latency_s, bandwidth, product_bytes, whole_every}, one_rank, n);
   return 0;
 }

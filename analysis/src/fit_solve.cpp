@@ -258,6 +258,57 @@ Eigen::MatrixXd jacobian(const Plan& plan, Evaluator& evaluator, const Eigen::Ve
   return J;
 }
 
+// The parameters a step may move: not one at a bound that the gradient pushes further out, nor one the data do not
+// depend on (a zero column: no step in it means anything).
+std::vector<Index> free_parameters(const Eigen::MatrixXd& A, const Eigen::VectorXd& g, const Eigen::VectorXd& z) {
+  std::vector<Index> free;
+  const double sensitive = 1e-14 * A.diagonal().maxCoeff();
+  for (Index k = 0; k < z.size(); ++k)
+    if (A(k, k) > sensitive && !((z[k] <= 0.0 && g[k] > 0.0) || (z[k] >= 1.0 && g[k] < 0.0))) free.push_back(k);
+  return free;
+}
+
+// z plus the damped Gauss-Newton step (A + lambda diag A) d = -g in the free parameters, clipped to the unit interval.
+Eigen::VectorXd damped_trial(const Eigen::MatrixXd& A, const Eigen::VectorXd& g, const Eigen::VectorXd& z,
+                             const std::vector<Index>& free, double lambda) {
+  const Index m = static_cast<Index>(free.size());
+  Eigen::MatrixXd Af(m, m);
+  Eigen::VectorXd gf(m);
+  for (Index i = 0; i < m; ++i) {
+    gf[i] = g[free[i]];
+    for (Index j = 0; j < m; ++j) Af(i, j) = A(free[i], free[j]);
+    Af(i, i) += lambda * std::max(A(free[i], free[i]), 1e-12);
+  }
+  const Eigen::VectorXd d = Af.ldlt().solve(-gf);
+  Eigen::VectorXd trial = z;
+  for (Index i = 0; i < m; ++i) trial[free[i]] = std::clamp(z[free[i]] + d[i], 0.0, 1.0);
+  return trial;
+}
+
+// After one outer iteration of levenberg_marquardt: whether the search ends there, with out.converged and
+// out.termination saying how.
+bool stops_after_iteration(Search& out, bool accepted, bool small_step, bool none_free, double lambda,
+                           int max_evaluations) {
+  if (out.converged) {
+    out.jacobian_scaled.resize(0, 0);  // computed before the last step: not at the optimum
+    return true;
+  }
+  if (small_step || none_free) {
+    out.converged = true;
+    out.termination = none_free ? "no parameter can move: each is at a bound the data push it past, or the data "
+                                  "do not depend on it"
+                                : "converged: the next step promises less than the tolerance";
+    return true;
+  }
+  if (!accepted) {
+    out.termination = lambda >= 1e10 ? "no step lowers the objective (damping at its limit)"
+                                     : fmt::format("the budget of {} evaluations is spent", max_evaluations);
+    out.converged = lambda >= 1e10;  // a minimum within the runs' own noise
+    return true;
+  }
+  return false;
+}
+
 Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::VectorXd z, int start) {
   const Settings& s = plan.settings;
   Search out;
@@ -284,26 +335,11 @@ Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::Vector
     const Eigen::VectorXd r = residual_vector(current);
     const Eigen::VectorXd g = J.transpose() * r;
     const Eigen::MatrixXd A = J.transpose() * J;
-    // A parameter at a bound that the gradient pushes further out stays there, and so does one the data do not
-    // depend on (a zero column: no step in it means anything).
-    std::vector<Index> free;
-    const double sensitive = 1e-14 * A.diagonal().maxCoeff();
-    for (Index k = 0; k < n; ++k)
-      if (A(k, k) > sensitive && !((z[k] <= 0.0 && g[k] > 0.0) || (z[k] >= 1.0 && g[k] < 0.0))) free.push_back(k);
+    const std::vector<Index> free = free_parameters(A, g, z);
     bool accepted = false, small_step = false;
     Eigen::VectorXd rejected = Eigen::VectorXd::Constant(n, -1.0);  // a trial already refused: not run again
     while (!accepted && budget_left() && lambda < 1e10 && !free.empty()) {
-      const Index m = static_cast<Index>(free.size());
-      Eigen::MatrixXd Af(m, m);
-      Eigen::VectorXd gf(m);
-      for (Index i = 0; i < m; ++i) {
-        gf[i] = g[free[i]];
-        for (Index j = 0; j < m; ++j) Af(i, j) = A(free[i], free[j]);
-        Af(i, i) += lambda * std::max(A(free[i], free[i]), 1e-12);
-      }
-      const Eigen::VectorXd d = Af.ldlt().solve(-gf);
-      Eigen::VectorXd trial = z;
-      for (Index i = 0; i < m; ++i) trial[free[i]] = std::clamp(z[free[i]] + d[i], 0.0, 1.0);
+      const Eigen::VectorXd trial = damped_trial(A, g, z, free, lambda);
       if ((trial - z).lpNorm<Eigen::Infinity>() < s.tolerance) {  // below what the runs' own noise resolves
         small_step = true;
         break;
@@ -340,23 +376,7 @@ Search levenberg_marquardt(const Plan& plan, Evaluator& evaluator, Eigen::Vector
         lambda *= 10.0;
       }
     }
-    if (out.converged) {
-      out.jacobian_scaled.resize(0, 0);  // computed before the last step: not at the optimum
-      break;
-    }
-    if (small_step || free.empty()) {
-      out.converged = true;
-      out.termination = free.empty() ? "no parameter can move: each is at a bound the data push it past, or the data "
-                                       "do not depend on it"
-                                     : "converged: the next step promises less than the tolerance";
-      break;
-    }
-    if (!accepted) {
-      out.termination = lambda >= 1e10 ? "no step lowers the objective (damping at its limit)"
-                                       : fmt::format("the budget of {} evaluations is spent", s.max_evaluations);
-      out.converged = lambda >= 1e10;  // a minimum within the runs' own noise
-      break;
-    }
+    if (stops_after_iteration(out, accepted, small_step, free.empty(), lambda, s.max_evaluations)) break;
   }
   out.z = z;
   out.best = current;

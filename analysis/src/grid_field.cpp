@@ -111,6 +111,41 @@ Vec3 reference_point(const BodyState& body, const std::vector<Vec3>& moved, std:
   return (1.0 - b.sum()) * reference[0] + b[0] * reference[1] + b[1] * reference[2] + b[2] * reference[3];
 }
 
+// Newton's method on X + u(X) = x with u's MLS gradient, from X (the prediction along the row; where u cannot be read
+// there, the moved tet's linear map, `fallback()`); it stops where a step no longer lowers the residual (a point the
+// moved tets fold over). X and jacobian (I + du/dX there) are left at the last point accepted; returns its residual.
+template <class Fallback>
+Vec3 solve_reference_point(const MlsTransfer& transfer, const std::vector<Vec3>& displacement, const Vec3& x,
+                           double tolerance, Vec3& X, Mat3& jacobian, Fallback&& fallback) {
+  const auto residual = [&](const Vec3& at, Mat3& J) {
+    const Vec3 r = at + transfer.at(at, displacement, J) - x;
+    J += Mat3::Identity();
+    return r;
+  };
+  Vec3 r;
+  try {
+    r = residual(X, jacobian);
+  } catch (const std::runtime_error&) {  // a prediction out of the cloud
+    X = fallback();
+    r = residual(X, jacobian);
+  }
+  for (int iteration = 0; iteration < 30 && r.norm() > tolerance; ++iteration) {
+    const Vec3 next = X - jacobian.partialPivLu().solve(r);
+    Mat3 next_jacobian;
+    Vec3 r_next;
+    try {
+      r_next = residual(next, next_jacobian);
+    } catch (const std::runtime_error&) {  // a step out of the cloud, where MLS has no neighbourhood
+      break;
+    }
+    if (!(r_next.norm() < r.norm())) break;
+    X = next;
+    r = r_next;
+    jacobian = next_jacobian;
+  }
+  return r;
+}
+
 void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer& transfer, double tolerance,
                 GridField& out) {
   std::vector<Vec3> moved(body.nodes.size());
@@ -157,36 +192,10 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
         overlapping += folded[v];
         const Vec3 x = grid.centre(i, j, k);
         Mat3 jacobian;
-        const auto residual = [&](const Vec3& X, Mat3& J) {
-          const Vec3 r = X + transfer.at(X, body.displacement, J) - x;
-          J += Mat3::Identity();
-          return r;
-        };
-        // Newton's method on X + u(X) = x with u's MLS gradient, from the prediction along the row or else the moved
-        // tet's linear map; it stops where a step no longer lowers the residual (a point the moved tets fold over).
         Vec3 X = have_last ? Vec3(last_X + last_jacobian.partialPivLu().solve(x - last_x))
                            : reference_point(body, moved, found[v], x);
-        Vec3 r;
-        try {
-          r = residual(X, jacobian);
-        } catch (const std::runtime_error&) {  // a prediction out of the cloud
-          X = reference_point(body, moved, found[v], x);
-          r = residual(X, jacobian);
-        }
-        for (int iteration = 0; iteration < 30 && r.norm() > tolerance; ++iteration) {
-          const Vec3 next = X - jacobian.partialPivLu().solve(r);
-          Mat3 next_jacobian;
-          Vec3 r_next;
-          try {
-            r_next = residual(next, next_jacobian);
-          } catch (const std::runtime_error&) {  // a step out of the cloud, where MLS has no neighbourhood
-            break;
-          }
-          if (!(r_next.norm() < r.norm())) break;
-          X = next;
-          r = r_next;
-          jacobian = next_jacobian;
-        }
+        const Vec3 r = solve_reference_point(transfer, body.displacement, x, tolerance, X, jacobian,
+                                             [&] { return reference_point(body, moved, found[v], x); });
         const bool converged = r.norm() <= tolerance;
         not_converged += !converged;
         if (!converged) {

@@ -383,6 +383,39 @@ bool check_choice(const ParameterSpec& spec, const json& v, const std::string& w
 
 bool is_number(const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }
 
+// Each entry of a list of numbers: a finite number in the spec's range (every bad entry named).
+bool check_number_list(const ParameterSpec& spec, const json& v, const std::string& where,
+                       std::vector<Problem>& problems) {
+  bool ok = true;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const std::string at = where + "/" + std::to_string(i);
+    if (!is_number(v[i])) {
+      problems.push_back({at, fmt::format("expected a number, got {} {}", json_type_name(v[i]), short_value(v[i]))});
+      ok = false;
+    } else if (!spec.range.contains(v[i].get<double>())) {
+      problems.push_back({at, range_message(spec, format_number(v[i].get<double>()))});
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+// Each entry of a list of strings: a string among the spec's choices, if it has any (every bad entry named).
+bool check_string_list(const ParameterSpec& spec, const json& v, const std::string& where,
+                       std::vector<Problem>& problems) {
+  bool ok = true;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const std::string at = where + "/" + std::to_string(i);
+    if (!v[i].is_string()) {
+      problems.push_back({at, fmt::format("expected a string, got {} {}", json_type_name(v[i]), short_value(v[i]))});
+      ok = false;
+    } else {
+      ok = check_choice(spec, v[i], at, problems) && ok;
+    }
+  }
+  return ok;
+}
+
 // Checks one value against its spec; returns false (with problems) if unusable.
 bool check_value(const ParameterSpec& spec, const json& v, const std::string& where, std::vector<Problem>& problems) {
   const auto wrong_type = [&](const std::string& expected) {
@@ -433,35 +466,12 @@ bool check_value(const ParameterSpec& spec, const json& v, const std::string& wh
       }
       return true;
     }
-    case ParameterType::number_list: {
+    case ParameterType::number_list:
       if (!v.is_array()) return wrong_type("a list of numbers" + with_unit(spec));
-      bool ok = true;
-      for (std::size_t i = 0; i < v.size(); ++i) {
-        const std::string at = where + "/" + std::to_string(i);
-        if (!is_number(v[i])) {
-          problems.push_back({at, fmt::format("expected a number, got {} {}", json_type_name(v[i]), short_value(v[i]))});
-          ok = false;
-        } else if (!spec.range.contains(v[i].get<double>())) {
-          problems.push_back({at, range_message(spec, format_number(v[i].get<double>()))});
-          ok = false;
-        }
-      }
-      return ok;
-    }
-    case ParameterType::string_list: {
+      return check_number_list(spec, v, where, problems);
+    case ParameterType::string_list:
       if (!v.is_array()) return wrong_type("a list of strings");
-      bool ok = true;
-      for (std::size_t i = 0; i < v.size(); ++i) {
-        const std::string at = where + "/" + std::to_string(i);
-        if (!v[i].is_string()) {
-          problems.push_back({at, fmt::format("expected a string, got {} {}", json_type_name(v[i]), short_value(v[i]))});
-          ok = false;
-        } else {
-          ok = check_choice(spec, v[i], at, problems) && ok;
-        }
-      }
-      return ok;
-    }
+      return check_string_list(spec, v, where, problems);
     case ParameterType::node_set:
       return NodeSelector::parse(v, where, problems).has_value();
   }

@@ -33,18 +33,42 @@ std::vector<Vec3> read_field(const fs::path& file) {
   return out;
 }
 
-TEST(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
-  const fs::path folder = test::scratch_dir("field-command");
-  const auto run =
-      test::run_mtled({"run", (fs::path(MTLED_TEST_SOURCE_DIR) / "share/scenes/uniaxial_cube_ogden.json").string(),
-                       "-o", (folder / "run").string(), "--threads", "1", "--no-progress"});
-  ASSERT_EQ(run.exit_code, 0) << run.output;
-  // A 24^3 grid of 0.6 mm voxels from (-1, -1, -1) mm: it holds the 10 mm cube and the cube compressed to 8 mm.
-  const fs::path grid = folder / "grid.nrrd";
-  const std::string write = (fs::path(MTLED_TEST_SOURCE_DIR) / "scripts/label_maps/write_label_map.py").string() +
-                            " cube " + grid.string() + " --size 24 --spacing 0.6 --origin -1 -1 -1";
-  ASSERT_EQ(std::system(write.c_str()), 0) << write;
+// The uniaxial cube's run and a 24^3 grid of 0.6 mm voxels from (-1, -1, -1) mm (a label map of the cube): it holds
+// the 10 mm cube and the cube compressed to 8 mm. Made for each test in its own folder (ctest runs them at once).
+class FieldCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    folder_ = test::scratch_dir(std::string("field-command-") +
+                                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    const auto run =
+        test::run_mtled({"run", (fs::path(MTLED_TEST_SOURCE_DIR) / "share/scenes/uniaxial_cube_ogden.json").string(),
+                         "-o", (folder_ / "run").string(), "--threads", "1", "--no-progress"});
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    grid_ = folder_ / "grid.nrrd";
+    const std::string write = (fs::path(MTLED_TEST_SOURCE_DIR) / "scripts/label_maps/write_label_map.py").string() +
+                              " cube " + grid_.string() + " --size 24 --spacing 0.6 --origin -1 -1 -1";
+    ASSERT_EQ(std::system(write.c_str()), 0) << write;
+  }
+  // The cube scene meshed from the grid's label map, compressed 0.5 mm.
+  json labelled_scene() const {
+    json labelled =
+        json::parse(test::read_text(fs::path(MTLED_TEST_SOURCE_DIR) / "share/scenes/uniaxial_cube_ogden.json"));
+    labelled["mesh"] = {{"type", "label_map"}, {"path", grid_.string()}, {"target_nodes", 400}};
+    labelled["boundaries"] = {
+        {{"type", "fixed"},
+         {"name", "bottom"},
+         {"nodes", {{"box", {{"min", {-1, -1, -1}}, {"max", {1, 1, 0.0028}}}}, {"surface_only", true}}}},
+        {{"type", "prescribed_displacement"},
+         {"name", "top"},
+         {"nodes", {{"box", {{"min", {-1, -1, 0.009}}, {"max", {1, 1, 1}}}}, {"surface_only", true}}},
+         {"displacement", {0, 0, -0.0005}}}};
+    return labelled;
+  }
+  fs::path folder_, grid_;
+};
 
+TEST_F(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
+  const fs::path folder = folder_, grid = grid_;
   // The affine map u = A X + b that fits the run's nodes.
   const ResultField result = read_result_vtu(folder / "run" / "result.vtu");
   Eigen::MatrixXd design(result.points.size(), 4);
@@ -101,19 +125,13 @@ TEST(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
       {"field", (folder / "run").string(), "-o", (folder / "neither.nrrd").string(), "--frame", "LPS"});
   EXPECT_EQ(neither.exit_code, 2) << neither.output;
   EXPECT_NE(neither.output.find("--like IMAGE"), std::string::npos) << neither.output;
+}
 
-  // A mesh made from the label map records its frame (summary.json): no --frame needed.
-  json labelled =
-      json::parse(test::read_text(fs::path(MTLED_TEST_SOURCE_DIR) / "share/scenes/uniaxial_cube_ogden.json"));
-  labelled["mesh"] = {{"type", "label_map"}, {"path", grid.string()}, {"target_nodes", 400}};
-  labelled["boundaries"] = {
-      {{"type", "fixed"},
-       {"name", "bottom"},
-       {"nodes", {{"box", {{"min", {-1, -1, -1}}, {"max", {1, 1, 0.0028}}}}, {"surface_only", true}}}},
-      {{"type", "prescribed_displacement"},
-       {"name", "top"},
-       {"nodes", {{"box", {{"min", {-1, -1, 0.009}}, {"max", {1, 1, 1}}}}, {"surface_only", true}}},
-       {"displacement", {0, 0, -0.0005}}}};
+// A mesh made from the label map records its frame (summary.json): no --frame needed; and the scene's output section
+// asks for the same field the command writes.
+TEST_F(FieldCommand, ALabelMapsMeshKnowsItsFrameAndTheSceneCanAskForTheField) {
+  const fs::path folder = folder_, grid = grid_;
+  json labelled = labelled_scene();
   test::write_text(folder / "labelled.json", labelled.dump(2));
   const auto labelled_run = test::run_mtled(
       {"run", (folder / "labelled.json").string(), "-o", (folder / "labelled").string(), "--no-progress"});
@@ -134,7 +152,10 @@ TEST(FieldCommand, TheUniaxialCubesFieldIsTheAffineMapAtEveryVoxel) {
   ASSERT_EQ(by_hand.exit_code, 0) << by_hand.output;
   EXPECT_EQ(test::read_text(folder / "with-field" / "displacement_field.nrrd"),
             test::read_text(folder / "by-hand.nrrd"));
+}
 
+TEST_F(FieldCommand, WithoutAPatientFrameTheFieldIsRefusedWithTheFix) {
+  const fs::path folder = folder_, grid = grid_;
   // The cube's Gmsh mesh records no patient frame: the command says how to give one.
   const auto frameless = test::run_mtled(
       {"field", (folder / "run").string(), "--like", grid.string(), "-o", (folder / "no.nrrd").string()});

@@ -31,6 +31,52 @@ std::size_t column(const std::vector<std::string>& header, const std::string& na
   return static_cast<std::size_t>(it - header.begin());
 }
 
+// One row of study.csv: what the checks below read.
+struct StudyRow {
+  std::string status, exit_code, pareto;
+  double time = NAN, error = NAN;
+};
+
+// study.csv's rows by label, after checking the columns every study writes.
+std::map<std::string, StudyRow> read_study_rows(const fs::path& csv) {
+  const auto rows = read_csv(csv);
+  EXPECT_EQ(rows.size(), 5u) << read_text(csv);
+  std::map<std::string, StudyRow> entries;
+  if (rows.empty()) return entries;
+  const auto& header = rows[0];
+  for (const auto& row : rows) EXPECT_EQ(row.size(), header.size());
+  for (const char* name :
+       {"label", "/discretisation/consistent_integration", "/integrator/load_steps", "/integrator/tolerance",
+        "/integrator/time_step_factor", "status", "exit_code", "nodes", "steps", "setup_time_s", "solve_time_s",
+        "wall_time_s", "peak_rss_mb", "value", "error", "pareto"})
+    column(header, name);
+  for (std::size_t r = 1; r < rows.size(); ++r) {
+    const auto& row = rows[r];
+    StudyRow e{row[column(header, "status")], row[column(header, "exit_code")], row[column(header, "pareto")]};
+    if (!row[column(header, "wall_time_s")].empty()) e.time = std::stod(row[column(header, "wall_time_s")]);
+    if (!row[column(header, "error")].empty()) e.error = std::stod(row[column(header, "error")]);
+    entries[row[0]] = e;
+  }
+  return entries;
+}
+
+// The marking is the definition: a run is on the front exactly when no other run is as fast and as accurate. Returns
+// how many are.
+int checked_pareto_front(const std::map<std::string, StudyRow>& entries) {
+  int on_front = 0;
+  for (const auto& [label, e] : entries) {
+    if (e.status != "ok") continue;
+    bool dominated = false;
+    for (const auto& [other, o] : entries)
+      if (other != label && o.status == "ok" && o.time <= e.time && o.error <= e.error &&
+          (o.time < e.time || o.error < e.error))
+        dominated = true;
+    EXPECT_EQ(e.pareto, dominated ? "false" : "true") << label;
+    on_front += e.pareto == "true";
+  }
+  return on_front;
+}
+
 TEST(Study, RecordsEveryConfigurationAndMarksTheParetoFront) {
   const fs::path folder = scratch_dir("study-force");
   const json study = {
@@ -57,54 +103,24 @@ TEST(Study, RecordsEveryConfigurationAndMarksTheParetoFront) {
   for (const char* part : {"[1/4] fast", "[2/4] slow_and_worse", "[3/4] unstable", "[4/4] tolerance=1e-07"})
     expect_contains(result.output, part);
 
-  const auto rows = read_csv(out / "study.csv");
-  ASSERT_EQ(rows.size(), 5u) << read_text(out / "study.csv");
-  const auto& header = rows[0];
-  for (const auto& row : rows) EXPECT_EQ(row.size(), header.size());
-  for (const char* name : {"label", "/discretisation/consistent_integration", "/integrator/load_steps",
-                           "/integrator/tolerance", "/integrator/time_step_factor", "status", "exit_code", "nodes",
-                           "steps", "setup_time_s", "solve_time_s", "wall_time_s", "peak_rss_mb", "value", "error",
-                           "pareto"})
-    column(header, name);
-  struct Entry {
-    std::string status, exit_code, pareto;
-    double time = NAN, error = NAN;
-  };
-  std::map<std::string, Entry> entries;
-  for (std::size_t r = 1; r < rows.size(); ++r) {
-    const auto& row = rows[r];
-    Entry e{row[column(header, "status")], row[column(header, "exit_code")], row[column(header, "pareto")]};
-    if (!row[column(header, "wall_time_s")].empty()) e.time = std::stod(row[column(header, "wall_time_s")]);
-    if (!row[column(header, "error")].empty()) e.error = std::stod(row[column(header, "error")]);
-    entries[row[0]] = e;
-  }
+  const std::map<std::string, StudyRow> entries = read_study_rows(out / "study.csv");
   ASSERT_EQ(entries.size(), 4u);
-  EXPECT_EQ(entries["fast"].status, "ok");
-  EXPECT_EQ(entries["slow_and_worse"].status, "ok");
-  EXPECT_EQ(entries["tolerance=1e-07"].status, "ok");
+  EXPECT_EQ(entries.at("fast").status, "ok");
+  EXPECT_EQ(entries.at("slow_and_worse").status, "ok");
+  EXPECT_EQ(entries.at("tolerance=1e-07").status, "ok");
   // A run that goes unstable is a row with its status, not the end of the study.
-  EXPECT_EQ(entries["unstable"].status, "unstable");
-  EXPECT_EQ(entries["unstable"].exit_code, "3");
-  EXPECT_TRUE(std::isnan(entries["unstable"].error));
-  EXPECT_EQ(entries["unstable"].pareto, "false");
+  EXPECT_EQ(entries.at("unstable").status, "unstable");
+  EXPECT_EQ(entries.at("unstable").exit_code, "3");
+  EXPECT_TRUE(std::isnan(entries.at("unstable").error));
+  EXPECT_EQ(entries.at("unstable").pareto, "false");
 
   // The accurate runs are close to the exact force; plain quadrature is not.
-  EXPECT_LT(entries["fast"].error, 1e-2);
-  EXPECT_LT(entries["tolerance=1e-07"].error, 1e-3);
-  EXPECT_GT(entries["slow_and_worse"].error, entries["fast"].error);
-  EXPECT_GT(entries["slow_and_worse"].time, entries["fast"].time);
-  EXPECT_EQ(entries["slow_and_worse"].pareto, "false");
-  // The marking is the definition: on the front exactly when no other run is as fast and as accurate.
-  int on_front = 0;
-  for (const auto& [label, e] : entries) {
-    if (e.status != "ok") continue;
-    bool dominated = false;
-    for (const auto& [other, o] : entries)
-      if (other != label && o.status == "ok" && o.time <= e.time && o.error <= e.error && (o.time < e.time || o.error < e.error))
-        dominated = true;
-    EXPECT_EQ(e.pareto, dominated ? "false" : "true") << label;
-    on_front += e.pareto == "true";
-  }
+  EXPECT_LT(entries.at("fast").error, 1e-2);
+  EXPECT_LT(entries.at("tolerance=1e-07").error, 1e-3);
+  EXPECT_GT(entries.at("slow_and_worse").error, entries.at("fast").error);
+  EXPECT_GT(entries.at("slow_and_worse").time, entries.at("fast").time);
+  EXPECT_EQ(entries.at("slow_and_worse").pareto, "false");
+  const int on_front = checked_pareto_front(entries);
   EXPECT_GE(on_front, 1);
 
   const json report = read_json(out / "study.json");

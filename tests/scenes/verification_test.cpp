@@ -107,6 +107,22 @@ TEST(SinglePrecisionRows, ANeedleInsertionAgreesWithDouble) {
     EXPECT_LE(nrmse.get<double>(), 1e-6) << component;
 }
 
+// A 3D Slicer markups line (the first `points` of: 0.5, 0.3, 4 mm on the top face, then 3 mm down), its x and y
+// times `sign` (-1 turns LPS points to RAS).
+void write_line_markups(const fs::path& file, const std::string& frame, double sign, int points) {
+  json control = json::array();
+  for (const double z : {4.0, 1.0})
+    if (static_cast<int>(control.size()) < points)
+      control.push_back({{"label", fmt::format("L-{}", control.size() + 1)},
+                         {"position", {sign * 0.5, sign * 0.3, z}},
+                         {"positionStatus", "defined"}});
+  write_text(
+      file,
+      json{{"markups",
+            {{{"type", "Line"}, {"coordinateSystem", frame}, {"coordinateUnits", "mm"}, {"controlPoints", control}}}}}
+          .dump(2));
+}
+
 // A needle planned in 3D Slicer: its trajectory, a markups line from the entry to the target in millimetres, in
 // LPS or in RAS (x and y negated), gives the same insertion into a labelled cube (LPS) as entry, direction and
 // depth given in metres; bad markups are refused naming the file or the scene key.
@@ -115,20 +131,9 @@ TEST(LabelMapNeedle, AMarkupsTrajectoryInEitherFrameIsTheSameNeedle) {
   const fs::path folder = scratch_dir("label_map_needle");
   const std::string python = "/usr/bin/python3 " + (source_dir() / "scripts/label_maps/write_label_map.py").string();
   ASSERT_EQ(std::system((python + " cube " + (folder / "cube.nrrd").string() + " --size 32").c_str()), 0);
-  const auto markups = [&](const std::string& name, const std::string& frame, double sign, int points) {
-    json control = json::array();
-    for (const double z : {4.0, 1.0})  // mm: the top face, then 3 mm down
-      if (static_cast<int>(control.size()) < points)
-        control.push_back({{"label", fmt::format("L-{}", control.size() + 1)},
-                           {"position", {sign * 0.5, sign * 0.3, z}},
-                           {"positionStatus", "defined"}});
-    write_text(folder / name, json{{"markups", {{{"type", "Line"}, {"coordinateSystem", frame},
-                                                {"coordinateUnits", "mm"}, {"controlPoints", control}}}}}
-                                  .dump(2));
-  };
-  markups("line_lps.mrk.json", "LPS", 1.0, 2);
-  markups("line_ras.mrk.json", "RAS", -1.0, 2);
-  markups("one_point.mrk.json", "LPS", 1.0, 1);
+  write_line_markups(folder / "line_lps.mrk.json", "LPS", 1.0, 2);
+  write_line_markups(folder / "line_ras.mrk.json", "RAS", -1.0, 2);
+  write_line_markups(folder / "one_point.mrk.json", "LPS", 1.0, 1);
   const auto run = [&](const std::string& name, const json& needle, const json& output = json::object()) {
     json needle_block = {{"type", "kinematic"}, {"diameter", 0.0008}};
     needle_block.update(needle);
