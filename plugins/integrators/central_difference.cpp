@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "load_curve.hpp"
+#include "integrator_parameters.hpp"
 #include "mtled/plugin.hpp"
 
 namespace mtled {
@@ -14,12 +14,7 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
   static void declare(ComponentDeclaration& d) {
     d.summary("Explicit central differences in physical time, with mass-proportional damping and a load curve.");
     d.number("duration").unit("s").positive().doc("simulated time");
-    d.number("time_step_factor")
-        .unit("1")
-        .positive()
-        .defaults(0.9)
-        .doc("multiplier on the estimated stable time step; above 1 risks instability, which the stability "
-             "monitors then report");
+    declare_time_step_factor(d);
     d.number("damping").unit("1/s").non_negative().defaults(0.0).doc(
         "mass-proportional damping coefficient c in M u'' + c M u' + f_int = f_ext");
     d.number("load_time").unit("s").positive().optional().doc(

@@ -29,7 +29,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "load_curve.hpp"
+#include "integrator_parameters.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
@@ -42,12 +42,7 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
     d.summary(
         "Adaptive dynamic relaxation: loads are applied over `load_steps` steps, then the iteration continues "
         "until the estimated distance to the steady state is below `tolerance`.");
-    d.number("time_step_factor")
-        .unit("1")
-        .positive()
-        .defaults(0.9)
-        .doc("multiplier on the estimated stable time step; above 1 risks instability, which the stability "
-             "monitors then report");
+    declare_time_step_factor(d);
     d.integer("load_steps").unit("1").at_least(1).defaults(2000).doc(
         "steps over which the loads grow from 0 to full; more steps follow a path-dependent load (the needle) "
         "more quasi-statically");

@@ -30,13 +30,7 @@ class GmshCylinder final : public MeshSource {
   }
 
   TetMesh load(const MeshContext&) override {
-    GeneratorRequest request;
-    request.component = "cylinder";
-    request.description = fmt::format("Gmsh cylinder, {}", describe(stack_));
-    request.build_geometry = [this] { return build_cylinder_stack(stack_); };
-    request.max_mesh_size = GeneratorRequest::SizeLimit{stack_.radius, "the radius"};
-    request.rim_curves = cylinder_rim_curves;
-    return generate_tet_mesh(parameters_, request);
+    return mesh_cylinder_stack(parameters_, stack_, "cylinder", "Gmsh cylinder");
   }
 
  private:

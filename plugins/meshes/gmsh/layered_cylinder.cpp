@@ -50,13 +50,7 @@ class GmshLayeredCylinder final : public MeshSource {
   }
 
   TetMesh load(const MeshContext&) override {
-    GeneratorRequest request;
-    request.component = "layered_cylinder";
-    request.description = fmt::format("Gmsh layered cylinder, {}", describe(stack_));
-    request.build_geometry = [this] { return build_cylinder_stack(stack_); };
-    request.max_mesh_size = GeneratorRequest::SizeLimit{stack_.radius, "the radius"};
-    request.rim_curves = cylinder_rim_curves;
-    return generate_tet_mesh(parameters_, request);
+    return mesh_cylinder_stack(parameters_, stack_, "layered_cylinder", "Gmsh layered cylinder");
   }
 
  private:

@@ -83,4 +83,15 @@ std::string describe(const CylinderStack& stack) {
                      fmt::join(stack.layer_heights, ", "), format_vector(stack.base_center));
 }
 
+TetMesh mesh_cylinder_stack(const Parameters& parameters, const CylinderStack& stack, const std::string& component,
+                            const std::string& title) {
+  GeneratorRequest request;
+  request.component = component;
+  request.description = fmt::format("{}, {}", title, describe(stack));
+  request.build_geometry = [&stack] { return build_cylinder_stack(stack); };
+  request.max_mesh_size = GeneratorRequest::SizeLimit{stack.radius, "the radius"};
+  request.rim_curves = cylinder_rim_curves;
+  return generate_tet_mesh(parameters, request);
+}
+
 }  // namespace mtled

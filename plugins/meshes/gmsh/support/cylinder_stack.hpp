@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "mtled/mesh.hpp"
 #include "mtled/parameters.hpp"
 #include "support/gmsh_model.hpp"
 
@@ -30,5 +31,10 @@ std::vector<int> cylinder_rim_curves();
 
 // "radius 0.015 m, layers [0.018, 0.009, 0.007] m, base centre [0, 0, 0] m".
 std::string describe(const CylinderStack& stack);
+
+// The stack meshed by Gmsh with the generator's parameters (target_nodes, ...), its elements no larger than the radius
+// and its rims kept sharp: the mesh of the `component` ("cylinder", "layered_cylinder") described as `title`.
+TetMesh mesh_cylinder_stack(const Parameters& parameters, const CylinderStack& stack, const std::string& component,
+                            const std::string& title);
 
 }  // namespace mtled

@@ -1,7 +1,8 @@
 #pragma once
-// How the applied load (prescribed displacements, needle depth) grows from 0 to 1 over the loading time, and what a
-// stop while it grows advises. "smooth" is the quintic 10x^3 - 15x^4 + 6x^5: zero velocity and acceleration at both
-// ends, so loading starts and stops without exciting the high modes (the quintic "smoothstep" ramp).
+// What the integrators share: the stable-step factor; how the applied load (prescribed displacements, needle depth)
+// grows from 0 to 1 over the loading time, and what a stop while it grows advises. "smooth" is the quintic
+// 10x^3 - 15x^4 + 6x^5: zero velocity and acceleration at both ends, so loading starts and stops without exciting the
+// high modes (the quintic "smoothstep" ramp).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -13,6 +14,17 @@
 namespace mtled {
 
 enum class LoadCurve { linear, smooth };
+
+// Declares "time_step_factor", the same for every explicit integrator.
+inline void declare_time_step_factor(ComponentDeclaration& d) {
+  d.number("time_step_factor")
+      .unit("1")
+      .positive()
+      .defaults(0.9)
+      .doc(
+          "multiplier on the estimated stable time step; above 1 risks instability, which the stability monitors "
+          "then report");
+}
 
 // Declares "load_curve", the one declaration every integrator that ramps its loads shares; read it back with
 // load_curve_from(parameters).
