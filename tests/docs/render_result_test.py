@@ -8,21 +8,15 @@ deformed one (where the cube is 8 mm tall and 11.15 mm wide).
 
   render_result_test.py MTLED SOURCE_DIR WORK_DIR
 """
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
+from picture_runs import run, run_ogden_cube
+
 STRETCH = 1.1153  # the lateral stretch of the Ogden cube at 20% compression (docs/validation.md)
-
-
-def run(command):
-    done = subprocess.run([str(c) for c in command], capture_output=True, text=True)
-    if done.returncode != 0:
-        sys.exit(f"{' '.join(map(str, command))} failed:\n{done.stdout}{done.stderr}")
-    return done.stdout
 
 
 def main():
@@ -31,7 +25,7 @@ def main():
     sys.path.insert(0, str(source / "scripts"))
     from render_result import colour_table  # noqa: E402
 
-    run([mtled, "run", source / "share/scenes/uniaxial_cube_ogden.json", "-o", work / "run", "--no-progress"])
+    run_ogden_cube(mtled, source, work / "run")
     table = colour_table().astype(int)
     failures = []
     for deformed in (False, True):

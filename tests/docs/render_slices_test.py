@@ -8,25 +8,19 @@ must mark the voxels the top face left.
 
   render_slices_test.py MTLED SOURCE_DIR WORK_DIR
 """
-import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
 
-
-def run(command):
-    done = subprocess.run([str(c) for c in command], capture_output=True, text=True)
-    if done.returncode != 0:
-        sys.exit(f"{' '.join(map(str, command))} failed:\n{done.stdout}{done.stderr}")
-    return done.stdout
+from picture_runs import run, run_ogden_cube
 
 
 def main():
     mtled, source, work = sys.argv[1], Path(sys.argv[2]), Path(sys.argv[3])
     work.mkdir(parents=True, exist_ok=True)
-    run([mtled, "run", source / "share/scenes/uniaxial_cube_ogden.json", "-o", work / "run", "--no-progress"])
+    run_ogden_cube(mtled, source, work / "run")
     # 40 voxels of 0.5 mm from -4.75 mm: the labelled middle half has its faces at 0 and 10 mm, the mesh's cube.
     labels = work / "cube.nrrd"
     run([source / "scripts/label_maps/write_label_map.py", "cube", labels, "--size", "40", "--spacing", "0.5",
