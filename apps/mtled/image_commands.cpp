@@ -152,6 +152,7 @@ int field_command(const FieldOptions& options, const std::vector<fs::path>& plug
       options.direction == "forward" ? FieldDirection::forward : FieldDirection::resampling;
   const GridField field =
       field_on_image({options.run, image, direction, options.frame, options.decay_mm}, plugin_paths);
+  phases.lap("the field on the grid, all phases above");
   Image out;
   out.grid = image.grid;
   out.space = image.space;
