@@ -154,8 +154,8 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
   // another moved tet holds the centre too with a different reference point.
   constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
   if (body.tets.size() >= kNone) throw std::invalid_argument("displacement_on_grid: 2^32 tets or more");
-  LargeVector<std::uint32_t> found(static_cast<std::size_t>(grid.count()), kNone);
-  LargeVector<char> folded(found.size(), 0);
+  LargeVector<std::uint32_t> found = large_vector(static_cast<std::size_t>(grid.count()), kNone);
+  LargeVector<char> folded = large_vector<char>(found.size(), 0);
   const auto centre_of = [&](std::int64_t v) {
     return grid.centre(v % grid.size[0], (v / grid.size[0]) % grid.size[1], v / (grid.size[0] * grid.size[1]));
   };
@@ -223,8 +223,8 @@ void resampling(const BodyState& body, const VoxelGrid& grid, const MlsTransfer&
 GridField displacement_on_grid(const BodyState& body, const VoxelGrid& grid, FieldDirection direction,
                                PluginCatalog& catalog, double tolerance) {
   GridField out;
-  out.values.assign(static_cast<std::size_t>(grid.count()), Vec3::Zero());
-  out.inside_body.assign(out.values.size(), 0);
+  out.values = large_vector<Vec3>(static_cast<std::size_t>(grid.count()), Vec3::Zero());
+  out.inside_body = large_vector<char>(out.values.size(), 0);
   PhaseLog phases;
   const MlsTransfer transfer(body.nodes, catalog);
   phases.lap("the nodes' supports binned");
@@ -288,13 +288,14 @@ double extend_outside(const VoxelGrid& grid, double decay, GridField& field) {
   constexpr std::int64_t kNone = -1;
   // Per voxel, the squared distance to the nearest voxel inside and that voxel, exact: one pass along each index
   // axis, each line on its own (so the lines go in parallel).
-  LargeVector<double> distance2(static_cast<std::size_t>(count), std::numeric_limits<double>::infinity());
-  LargeVector<std::int64_t> nearest(distance2.size(), kNone);
-  for (std::int64_t v = 0; v < count; ++v)
-    if (field.inside_body[static_cast<std::size_t>(v)]) {
-      distance2[static_cast<std::size_t>(v)] = 0.0;
-      nearest[static_cast<std::size_t>(v)] = v;
-    }
+  LargeVector<double> distance2(static_cast<std::size_t>(count));
+  LargeVector<std::int64_t> nearest(distance2.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t v = 0; v < count; ++v) {
+    const bool inside = field.inside_body[static_cast<std::size_t>(v)] != 0;
+    distance2[static_cast<std::size_t>(v)] = inside ? 0.0 : std::numeric_limits<double>::infinity();
+    nearest[static_cast<std::size_t>(v)] = inside ? v : kNone;
+  }
   const std::int64_t stride[3] = {1, n[0], n[0] * n[1]};
   for (int axis = 0; axis < 3; ++axis) {
     const int a = (axis + 1) % 3, b = (axis + 2) % 3;  // the other two axes span the lines' starts

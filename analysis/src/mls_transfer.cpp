@@ -6,6 +6,11 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "mtled/parameters.hpp"
 
@@ -66,20 +71,52 @@ void MlsTransfer::fill_bins() {
     }
     return distance2 <= radius_[i] * radius_[i];
   };
-  const auto each_bin = [&](std::size_t i, auto&& visit) {
+  // visit(b) for each bin b in layers k_first..k_last that node i's support reaches.
+  const auto each_bin = [&](std::size_t i, std::int64_t k_first, std::int64_t k_last, auto&& visit) {
     std::array<std::int64_t, 3> first{}, last{};
     for (std::size_t a = 0; a < 3; ++a) {
       const auto axis = static_cast<Index>(a);
       first[a] = std::max<std::int64_t>(0, std::int64_t((nodes_[i][axis] - radius_[i] - lo[axis]) / bin_size_));
       last[a] = std::min(bins_[a] - 1, std::int64_t((nodes_[i][axis] + radius_[i] - lo[axis]) / bin_size_));
     }
-    for (std::int64_t k = first[2]; k <= last[2]; ++k)
+    for (std::int64_t k = std::max(first[2], k_first); k <= std::min(last[2], k_last); ++k)
       for (std::int64_t j = first[1]; j <= last[1]; ++j)
         for (std::int64_t b = first[0]; b <= last[0]; ++b)
           if (reaches(i, {b, j, k})) visit(b + bins_[0] * (j + bins_[1] * k));
   };
-  // The nodes packed (position, squared radius) in the order of their own bins, so that a bin's list reads nearby
-  // memory.
+  pack_nodes();
+  const std::vector<Index>& order = packed_node_;
+  // Counted, then listed, by threads that each own a range of bin layers and go through the nodes in packed order: a
+  // bin is written by one thread only and lists its nodes in packed order, whatever the number of threads.
+  const auto by_layers = [&](auto&& visit_layers) {
+#pragma omp parallel
+    {
+#ifdef _OPENMP
+      const auto threads = std::int64_t(omp_get_num_threads()), thread = std::int64_t(omp_get_thread_num());
+#else
+      const std::int64_t threads = 1, thread = 0;
+#endif
+      visit_layers(bins_[2] * thread / threads, bins_[2] * (thread + 1) / threads - 1);
+    }
+  };
+  bin_start_.assign(static_cast<std::size_t>(bins_[0] * bins_[1] * bins_[2] + 1), 0);
+  by_layers([&](std::int64_t k_first, std::int64_t k_last) {
+    for (const Index i : order)
+      each_bin(std::size_t(i), k_first, k_last, [&](std::int64_t b) { ++bin_start_[std::size_t(b) + 1]; });
+  });
+  for (std::size_t b = 1; b < bin_start_.size(); ++b) bin_start_[b] += bin_start_[b - 1];
+  bin_nodes_.resize(static_cast<std::size_t>(bin_start_.back()));
+  std::vector<std::int64_t> next(bin_start_.begin(), bin_start_.end() - 1);
+  by_layers([&](std::int64_t k_first, std::int64_t k_last) {
+    for (std::size_t p = 0; p < order.size(); ++p)
+      each_bin(std::size_t(order[p]), k_first, k_last, [&](std::int64_t b) {
+        bin_nodes_[std::size_t(next[std::size_t(b)]++)] = static_cast<std::uint32_t>(p);
+      });
+  });
+}
+
+// The nodes packed (position, support radius) in the order of their own bins, so that a bin's list reads nearby memory.
+void MlsTransfer::pack_nodes() {
   std::vector<Index> order(nodes_.size());
   std::vector<std::int64_t> home(nodes_.size());
   for (std::size_t i = 0; i < nodes_.size(); ++i) {
@@ -89,19 +126,11 @@ void MlsTransfer::fill_bins() {
   std::stable_sort(order.begin(), order.end(),
                    [&](Index a, Index b) { return home[std::size_t(a)] < home[std::size_t(b)]; });
   packed_.resize(nodes_.size());
-  packed_node_ = order;
   for (std::size_t p = 0; p < order.size(); ++p) {
     const auto i = static_cast<std::size_t>(order[p]);
-    packed_[p] << nodes_[i], radius_[i] * radius_[i];
+    packed_[p] << nodes_[i], radius_[i];
   }
-  bin_start_.assign(static_cast<std::size_t>(bins_[0] * bins_[1] * bins_[2] + 1), 0);
-  for (const Index i : order) each_bin(std::size_t(i), [&](std::int64_t b) { ++bin_start_[std::size_t(b) + 1]; });
-  for (std::size_t b = 1; b < bin_start_.size(); ++b) bin_start_[b] += bin_start_[b - 1];
-  bin_nodes_.resize(static_cast<std::size_t>(bin_start_.back()));
-  std::vector<std::int64_t> next(bin_start_.begin(), bin_start_.end() - 1);
-  for (std::size_t p = 0; p < order.size(); ++p)
-    each_bin(std::size_t(order[p]),
-             [&](std::int64_t b) { bin_nodes_[std::size_t(next[std::size_t(b)]++)] = static_cast<std::uint32_t>(p); });
+  packed_node_ = std::move(order);
 }
 
 std::int64_t MlsTransfer::bin_of(const Vec3& x) const {
@@ -143,16 +172,18 @@ Vec3 MlsTransfer::evaluate(const Vec3& x, const std::vector<Vec3>& values, Mat3*
     Vec3* to_coordinates = coordinates.data();
     Vec3* to_values = node_values.data();
     double* to_radii = radii.data();
+    // Every listed node is written and the count advances past those whose support holds x: about half of them do,
+    // which a branch would guess wrong half the time.
     for (; listed != end; ++listed) {
       const auto p = static_cast<std::size_t>(*listed);
       const Eigen::Vector4d& node = packed_[p];
       const double distance2 = (node.head<3>() - x).squaredNorm();
-      if (distance2 < node[3]) {
-        to_coordinates[count] = node.head<3>();
-        to_values[count] = values[static_cast<std::size_t>(packed_node_[p])];
-        to_radii[count] = std::sqrt(std::max(node[3], 1.0201 * distance2));  // as below: at least 1.01 |x_I - x|
-        ++count;
-      }
+      const double radius2 = node[3] * node[3];
+      to_coordinates[count] = node.head<3>();
+      to_values[count] = values[static_cast<std::size_t>(packed_node_[p])];
+      // As below, at least 1.01 |x_I - x|.
+      to_radii[count] = 1.0201 * distance2 > radius2 ? 1.01 * std::sqrt(distance2) : node[3];
+      count += static_cast<std::size_t>(std::signbit(distance2 - radius2));  // distance2 < radius2, with no branch
     }
   }
   if (static_cast<int>(count) < mls_->minimum_support_size()) {

@@ -153,18 +153,15 @@ int field_command(const FieldOptions& options, const std::vector<fs::path>& plug
   const GridField field =
       field_on_image({options.run, image, direction, options.frame, options.decay_mm}, plugin_paths);
   phases.lap("the field on the grid, all phases above");
-  Image out;
+  Image out;  // the grid and frame; the values are the field's own, three doubles a voxel
   out.grid = image.grid;
   out.space = image.space;
   out.components = 3;
-  out.values.resize(3 * field.values.size());
-#pragma omp parallel for schedule(static)
-  for (std::size_t v = 0; v < field.values.size(); ++v)
-    for (std::size_t c = 0; c < 3; ++c) out.values[3 * v + c] = field.values[v][static_cast<Index>(c)];
-  phases.lap("the field laid out as an image");
+  static_assert(sizeof(Vec3) == 3 * sizeof(double), "a Vec3 is three doubles, unpadded");
+  const std::span<const double> values(field.values.data()->data(), 3 * field.values.size());
   create_parent(options.output);
   // Slicer reads a NRRD field as a resampling transform unless it says otherwise.
-  write_image(options.output, out,
+  write_image(options.output, out, values,
               direction == FieldDirection::forward
                   ? std::map<std::string, std::string>{{"displacement field type", "modeling"}}
                   : std::map<std::string, std::string>{});

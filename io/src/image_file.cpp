@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <initializer_list>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -126,7 +125,8 @@ std::int16_t nifti_datatype(VoxelType type) {
 std::string vector_text(const Vec3& v) { return fmt::format("({:.17g},{:.17g},{:.17g})", v[0], v[1], v[2]); }
 
 // The NRRD header and the gzipped voxels.
-std::pair<std::string, std::string> nrrd_bytes(const Image& image, const std::map<std::string, std::string>& extra) {
+std::pair<std::string, GzipParts> nrrd_bytes(const Image& image, std::span<const double> values,
+                                             const std::map<std::string, std::string>& extra) {
   const bool vectors = image.components == 3;
   // A vector field goes in LPS whatever the grid's frame: ITK and Slicer turn a RAS grid to LPS on reading but leave
   // the vectors as stored.
@@ -155,14 +155,14 @@ std::pair<std::string, std::string> nrrd_bytes(const Image& image, const std::ma
   header += "\n";
   LargeVector<char> voxels;
   // Vectors in millimetres.
-  append_encoded(voxels, image.values, type, vectors ? Layout{3, 1e3 * turn.diagonal(), false} : Layout{});
-  return {std::move(header), gzip(voxels)};
+  append_encoded(voxels, values, type, vectors ? Layout{3, 1e3 * turn.diagonal(), false} : Layout{});
+  return {std::move(header), GzipParts(voxels)};
 }
 
 // NIfTI-1 single file (the NIfTI-1 standard's nifti1.h layout): a 348-byte header, 4 bytes of no extension, the
 // voxels from byte 352. The grid in RAS, placed by the sform and the same qform (as nibabel writes them); vectors
 // as intent DISPVECT, dim[5] = 3, one component volume after another.
-LargeVector<char> nifti_bytes(const Image& image) {
+LargeVector<char> nifti_bytes(const Image& image, std::span<const double> values) {
   const bool vectors = image.components == 3;
   const VoxelType type = vectors ? VoxelType{VoxelKind::floating, 4} : image.type;
   const Mat3 to_ras = image.space == "LPS" ? lps_ras_flip() : Mat3::Identity();
@@ -208,7 +208,7 @@ LargeVector<char> nifti_bytes(const Image& image) {
                                    : origin[static_cast<Index>(r)]));
   std::memcpy(header.data() + 344, "n+1", 4);
   LargeVector<char> bytes(header.begin(), header.end());
-  append_encoded(bytes, image.values, type, vectors ? Layout{3, 1e3 * to_ras.diagonal(), true} : Layout{});
+  append_encoded(bytes, values, type, vectors ? Layout{3, 1e3 * to_ras.diagonal(), true} : Layout{});
   return bytes;
 }
 
@@ -216,7 +216,7 @@ bool ends_with(const std::string& name, const std::string& suffix) {
   return name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-void write_atomically(const fs::path& file, std::initializer_list<std::span<const char>> parts) {
+void write_atomically(const fs::path& file, const std::vector<std::span<const char>>& parts) {
   const fs::path temporary = file.parent_path() / ("." + file.filename().string() + ".tmp");
   {
     std::ofstream out(temporary, std::ios::binary);
@@ -233,11 +233,13 @@ void write_atomically(const fs::path& file, std::initializer_list<std::span<cons
 // a sync flush so the next piece starts on a byte; the last one finishes the stream) and their CRC-32s combined, as
 // pigz does. Any gzip reader reads it as one stream; each piece starts with an empty dictionary, which costs a
 // fraction of a percent in size. Matches are runs only (zlib's Z_RLE): on a displacement field (zeros outside, float
-// noise inside) as small as zlib's fastest level and twice as fast, on a label map half the size.
-std::string gzip(std::span<const char> bytes) {
+// noise inside) as small as zlib's fastest level and twice as fast, on a label map half the size. The parts (header,
+// pieces, trailer) are kept apart, to be written one after the other without joining them first.
+GzipParts::GzipParts(std::span<const char> bytes) {
   constexpr std::size_t kPiece = std::size_t{1} << 20;
   const std::size_t pieces = std::max<std::size_t>(1, (bytes.size() + kPiece - 1) / kPiece);
-  std::vector<std::string> deflated(pieces);
+  pieces_.resize(pieces);
+  sizes_.assign(pieces, 0);
   std::vector<uLong> crc(pieces);
   bool failed = false;
 #pragma omp parallel for schedule(dynamic) reduction(|| : failed)
@@ -250,35 +252,40 @@ std::string gzip(std::span<const char> bytes) {
       failed = true;
       continue;
     }
-    std::string& out = deflated[p];
-    out.resize(deflateBound(&stream, static_cast<uLong>(size)) + 16);  // + the sync flush's empty block
+    const std::size_t room = deflateBound(&stream, static_cast<uLong>(size)) + 16;  // + the sync flush's empty block
+    pieces_[p].reset(new char[room]);  // not zeroed: deflate writes what is kept
     stream.next_in = const_cast<Bytef*>(data);
     stream.avail_in = static_cast<uInt>(size);
-    stream.next_out = reinterpret_cast<Bytef*>(out.data());
-    stream.avail_out = static_cast<uInt>(out.size());
+    stream.next_out = reinterpret_cast<Bytef*>(pieces_[p].get());
+    stream.avail_out = static_cast<uInt>(room);
     const bool last = p + 1 == pieces;
     const int status = deflate(&stream, last ? Z_FINISH : Z_SYNC_FLUSH);
     failed = failed || (last ? status != Z_STREAM_END : status != Z_OK || stream.avail_in != 0);
-    out.resize(out.size() - stream.avail_out);
+    sizes_[p] = room - stream.avail_out;
     deflateEnd(&stream);
   }
   if (failed) throw std::runtime_error("zlib could not deflate the image");
   uLong total_crc = crc[0];
-  std::size_t total = 18;  // the 10-byte header and the 8-byte trailer
-  for (std::size_t p = 0; p < pieces; ++p) {
-    if (p > 0)
-      total_crc = crc32_combine(total_crc, crc[p], static_cast<z_off_t>(std::min(kPiece, bytes.size() - p * kPiece)));
-    total += deflated[p].size();
-  }
-  std::string out;
-  out.reserve(total);
-  out.append("\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\xff", 10);  // gzip, deflate, no flags or time, unknown OS
-  for (const std::string& piece : deflated) out += piece;
+  for (std::size_t p = 1; p < pieces; ++p)
+    total_crc = crc32_combine(total_crc, crc[p], static_cast<z_off_t>(std::min(kPiece, bytes.size() - p * kPiece)));
+  header_.assign("\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\xff", 10);  // gzip, deflate, no flags or time, unknown OS
   const auto little_endian = [&](std::uint32_t value) {
-    for (int b = 0; b < 4; ++b) out.push_back(static_cast<char>((value >> (8 * b)) & 0xffu));
+    for (int b = 0; b < 4; ++b) trailer_.push_back(static_cast<char>((value >> (8 * b)) & 0xffu));
   };
   little_endian(static_cast<std::uint32_t>(total_crc));
   little_endian(static_cast<std::uint32_t>(bytes.size() & 0xffffffffu));  // ISIZE: the length modulo 2^32
+}
+
+std::vector<std::span<const char>> GzipParts::parts() const {
+  std::vector<std::span<const char>> out{header_};
+  for (std::size_t p = 0; p < pieces_.size(); ++p) out.emplace_back(pieces_[p].get(), sizes_[p]);
+  out.emplace_back(trailer_);
+  return out;
+}
+
+std::string gzip(std::span<const char> bytes) {
+  std::string out;
+  for (const std::span<const char> part : GzipParts(bytes).parts()) out.append(part.data(), part.size());
   return out;
 }
 
@@ -330,20 +337,29 @@ Image read_image(const fs::path& file) {
 }
 
 void write_image(const fs::path& file, const Image& image, const std::map<std::string, std::string>& key_values) {
+  write_image(file, image, image.values, key_values);
+}
+
+void write_image(const fs::path& file, const Image& image, std::span<const double> values,
+                 const std::map<std::string, std::string>& key_values) {
   if (image.components != 1 && image.components != 3)
     throw std::logic_error("write_image: an image holds a scalar or a 3-vector per voxel");
+  if (values.size() != static_cast<std::size_t>(image.components * image.grid.count()))
+    throw std::logic_error("write_image: the values do not fill the grid");
   if (!is_nifti_name(file)) {
-    const auto [header, voxels] = nrrd_bytes(image, key_values);
-    write_atomically(file, {header, voxels});
+    const auto [header, voxels] = nrrd_bytes(image, values, key_values);
+    std::vector<std::span<const char>> parts = voxels.parts();
+    parts.insert(parts.begin(), header);
+    write_atomically(file, parts);
   } else {
     for (const std::int64_t n : image.grid.size)
       if (n > 32767)
         throw InputError(file.string(), fmt::format("{} voxels along an axis: NIfTI-1 holds at most 32767; write "
                                                     "NRRD (.nrrd) instead",
                                                     n));
-    const LargeVector<char> bytes = nifti_bytes(image);
+    const LargeVector<char> bytes = nifti_bytes(image, values);
     if (ends_with(file.filename().string(), ".gz"))
-      write_atomically(file, {gzip(bytes)});
+      write_atomically(file, GzipParts(bytes).parts());
     else
       write_atomically(file, {bytes});
   }

@@ -1,11 +1,12 @@
 #include "moving_least_squares.hpp"
 
 #include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
+
+#include "linear_node_sums.hpp"
 
 namespace mtled::shapefunctions {
 
@@ -87,6 +88,20 @@ struct MomentFit {
   ShapeFunctionFit status;
 };
 
+// Factorises the moment matrix into fit.factor and, where it is positive definite and well enough conditioned, sets
+// fit.c = A^{-1} p(0) and fit.status.ok.
+template <int M>
+void factorise(const MomentMatrix<M>& moment, MomentFit<M>& fit) {
+  fit.factor.compute(moment);
+  if (fit.factor.info() != Eigen::Success || !(fit.factor.vectorD().minCoeff() > 0.0)) return;
+  const double reciprocal_condition = fit.factor.rcond();
+  if (!std::isfinite(reciprocal_condition)) return;
+  fit.status.reciprocal_condition = reciprocal_condition;
+  if (reciprocal_condition < kMinimumReciprocalCondition) return;
+  fit.c = fit.factor.solve(BasisVector<M>::Unit(0));
+  fit.status.ok = true;
+}
+
 // The weights, the scale, the moment matrix and its factorisation at x (see evaluate_moving_least_squares); status.ok
 // is false where no node reaches x or A is singular or too ill-conditioned.
 template <int M>
@@ -136,14 +151,7 @@ MomentFit<M> fit_moments(double penalty, const Vec3& x, std::span<const Vec3> no
   if constexpr (M == 4) moment.template block<1, 3>(0, 1) = moment.template block<3, 1>(1, 0).transpose();
   if constexpr (M > 4) moment.diagonal().template tail<M - 4>().array() += out.mu;
 
-  out.factor.compute(moment);
-  if (out.factor.info() != Eigen::Success || !(out.factor.vectorD().minCoeff() > 0.0)) return out;
-  const double reciprocal_condition = out.factor.rcond();
-  if (!std::isfinite(reciprocal_condition)) return out;
-  out.status.reciprocal_condition = reciprocal_condition;
-  if (reciprocal_condition < kMinimumReciprocalCondition) return out;
-  out.c = out.factor.solve(BasisVector<M>::Unit(0));
-  out.status.ok = true;
+  factorise<M>(moment, out);
   return out;
 }
 
@@ -232,6 +240,55 @@ ShapeFunctionFit interpolate(double penalty, const Vec3& x, std::span<const Vec3
   return moments.status;
 }
 
+// interpolate() for the linear basis, its node sums vectorised (linear_node_sums.hpp): the field on an image grid
+// calls it millions of times. The sums are taken over the unscaled offsets d_I = X_I - x, since the scale is known
+// only once the weights are summed, and scaled afterwards (p_I = [1, d_I / s]). The same fit, summed in another order.
+ShapeFunctionFit interpolate_linear(const Vec3& x, std::span<const Vec3> nodes, std::span<const double> radii,
+                                    std::span<const Vec3> node_values, Vec3& value, Mat3* gradient) {
+  thread_local NodeColumns columns;
+  columns.resize(nodes.size());
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    columns.dx[i] = nodes[i][0] - x[0];
+    columns.dy[i] = nodes[i][1] - x[1];
+    columns.dz[i] = nodes[i][2] - x[2];
+    columns.radius[i] = radii[i];
+    columns.vx[i] = node_values[i][0];
+    columns.vy[i] = node_values[i][1];
+    columns.vz[i] = node_values[i][2];
+  }
+  const LinearWeightSums sums = linear_weight_sums(columns);
+  if (!(sums.weight > 0.0) || !std::isfinite(sums.weighted_radius)) return {};
+  MomentFit<4> fit;
+  const double inverse_scale = fit.inverse_scale = sums.weight / sums.weighted_radius;
+  MomentMatrix<4> moment;
+  moment(0, 0) = sums.weight;
+  moment.block<3, 1>(1, 0) = inverse_scale * sums.first_moment;
+  moment.block<1, 3>(0, 1) = moment.block<3, 1>(1, 0).transpose();
+  moment.block<3, 3>(1, 1) = (inverse_scale * inverse_scale) * sums.second_moment;
+  factorise<4>(moment, fit);
+  if (!fit.status.ok) return fit.status;
+  Eigen::Matrix<double, 3, 4> weighted;  // sum_I w_I v_I p_I^T
+  weighted.col(0) = sums.weighted_value;
+  weighted.rightCols<3>() = inverse_scale * sums.weighted_value_offset;
+  value = weighted * fit.c;
+  bool finite = value.allFinite();
+  if (gradient != nullptr) {
+    // gamma's right-hand side e_{1+k} / s - sum_I (c . p_I) p_I w_I,k^T, and sum_I (c . p_I) v_I w_I,k^T.
+    const LinearGradientSums terms = linear_gradient_sums(columns, fit.c[0], inverse_scale * fit.c.tail<3>());
+    Eigen::Matrix<double, 4, 3> rhs;
+    rhs.row(0) = -terms.first.transpose();
+    rhs.bottomRows<3>() = inverse_scale * (Mat3::Identity() - terms.offset_sum);
+    *gradient = weighted * fit.factor.solve(rhs) + terms.value_sum;
+    finite = finite && gradient->allFinite();
+  }
+  if (!finite) {  // as in fit(): never let NaN out
+    value.setZero();
+    if (gradient != nullptr) gradient->setZero();
+    return {false, 0.0};
+  }
+  return fit.status;
+}
+
 }  // namespace
 
 ShapeFunctionFit evaluate_moving_least_squares(const MovingLeastSquaresSettings& settings, const Vec3& x,
@@ -256,7 +313,7 @@ ShapeFunctionFit interpolate_moving_least_squares(const MovingLeastSquaresSettin
   if (gradient != nullptr) gradient->setZero();
   if (!x.allFinite()) return {};
   if (settings.basis == PolynomialBasis::linear)
-    return interpolate<4>(0.0, x, nodes, radii, node_values, value, gradient);
+    return interpolate_linear(x, nodes, radii, node_values, value, gradient);
   return interpolate<10>(settings.quadratic_penalty, x, nodes, radii, node_values, value, gradient);
 }
 

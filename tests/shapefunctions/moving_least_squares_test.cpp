@@ -1,16 +1,16 @@
 // What is particular to `mls` and `mmls`: quadratic reproduction, the O(m^2) effect of the MMLS penalty,
 // MMLS staying well posed where a quadratic fit is impossible, parameter validation, and the kernel's model
 // built with each of them.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 
-#include <fmt/format.h>
-
 #include "mtled/model.hpp"
 #include "shape_function_fixtures.hpp"
+#include "simd_targets.hpp"
 
 namespace mtled::test {
 namespace {
@@ -84,6 +84,45 @@ TEST(MlsShapeFunctions, MinimumSupportSizeFollowsTheBasis) {
   EXPECT_EQ(make<ShapeFunctions>("mls", {{"basis", "quadratic"}})->minimum_support_size(), 10);
   EXPECT_EQ(make<ShapeFunctions>("mmls", json::object())->minimum_support_size(), 4);
   EXPECT_DOUBLE_EQ(make<ShapeFunctions>("mls", json::object())->support_dilatation(), 1.6);
+}
+
+// The linear basis' interpolate() sums its nodes in SIMD lanes (linear_node_sums.cpp): on every instruction set this
+// CPU and the build support, it must be sum_I N_I v_I and sum_I v_I dN_I/dx^T from evaluate(), to their round-off.
+// The supports reach 30% past the nodes' radii, so that lanes holding nodes of no weight are exercised, and their
+// sizes vary, so that every remainder of a vector's width is.
+TEST(MlsShapeFunctions, LinearInterpolationIsTheShapeFunctionSumsOnEverySimdTarget) {
+  const auto mls = make<ShapeFunctions>("mls", {{"basis", "linear"}});
+  const NodeCloud cloud = box_cloud(mls->support_dilatation(), kBlock, 6, 4, 5, 0.3, 3);
+  for_each_simd_target([&](const std::string& target) {
+    std::mt19937 random(5);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::vector<std::size_t> sizes;
+    for (int k = 0; k < 60; ++k) {
+      const Vec3 x = random_point(random, cloud.lower, cloud.upper);
+      const Support support = support_at(cloud, x, 0.3);
+      std::vector<Vec3> field(support.nodes.size());
+      for (Vec3& v : field) v = Vec3(unit(random), unit(random), unit(random));
+      const Evaluation full = evaluate(*mls, support, x, true);
+      Vec3 value;
+      Mat3 gradient;
+      ASSERT_EQ(mls->interpolate(x, support.nodes, support.radii, field, value, &gradient).ok, full.fit.ok);
+      if (!full.fit.ok) continue;
+      sizes.push_back(support.nodes.size());
+      Vec3 expected = Vec3::Zero();
+      Mat3 expected_gradient = Mat3::Zero();
+      for (std::size_t i = 0; i < field.size(); ++i) {
+        expected += full.values[i] * field[i];
+        expected_gradient += field[i] * full.gradients[i].transpose();
+      }
+      const double tolerance = roundoff_bound(full.fit, support.nodes.size());
+      EXPECT_LE((value - expected).cwiseAbs().maxCoeff(), tolerance) << target << ", point " << k;
+      EXPECT_LE((gradient - expected_gradient).cwiseAbs().maxCoeff(), tolerance / support.mean_radius())
+          << target << ", point " << k;
+    }
+    std::sort(sizes.begin(), sizes.end());
+    sizes.erase(std::unique(sizes.begin(), sizes.end()), sizes.end());
+    EXPECT_GE(sizes.size(), 8U) << target << ": the supports should have many sizes";
+  });
 }
 
 // Quadratic MLS reproduces quadratics exactly (to round-off); linear MLS does not, which shows the check bites.

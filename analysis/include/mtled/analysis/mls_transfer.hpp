@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "mtled/interfaces/shape_functions.hpp"
+#include "mtled/io/large_buffer.hpp"
 #include "mtled/plugin_catalog.hpp"
 #include "mtled/point_search.hpp"
 
@@ -29,6 +30,7 @@ class MlsTransfer {
   std::int64_t bin_of(const Vec3& x) const;  // -1 outside the bins
   Vec3 evaluate(const Vec3& x, const std::vector<Vec3>& values, Mat3* gradient) const;
   void fill_bins();
+  void pack_nodes();
 
   const std::vector<Vec3>& nodes_;
   std::shared_ptr<ShapeFunctions> mls_;
@@ -38,8 +40,8 @@ class MlsTransfer {
   double bin_size_ = 1.0;
   std::array<std::int64_t, 3> bins_{0, 0, 0};
   std::vector<std::int64_t> bin_start_;
-  std::vector<std::uint32_t> bin_nodes_;  // positions in packed_ (a cloud has fewer than 2^32 nodes)
-  std::vector<Eigen::Vector4d> packed_;  // a node's position and squared support radius, in bin order
+  LargeVector<std::uint32_t> bin_nodes_;  // positions in packed_ (a cloud has fewer than 2^32 nodes)
+  std::vector<Eigen::Vector4d> packed_;   // a node's position and support radius, in bin order
   std::vector<Index> packed_node_;       // the node each packed_ entry is
 };
 

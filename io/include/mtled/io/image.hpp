@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -63,6 +64,10 @@ Image parse_nifti(const std::string& bytes, const std::string& source);
 // NIfTI intent DISPVECT (1006). `key_values` are added to the NRRD header.
 void write_image(const std::filesystem::path& file, const Image& image,
                  const std::map<std::string, std::string>& key_values = {});
+// The same with the values given apart (image.values is not read): a field written from where it was computed, with
+// no copy of it laid out as an image first.
+void write_image(const std::filesystem::path& file, const Image& image, std::span<const double> values,
+                 const std::map<std::string, std::string>& key_values = {});
 
 // The format a file name asks for: true for .nii / .nii.gz, false for .nrrd; an InputError for anything else.
 bool is_nifti_name(const std::filesystem::path& file);
@@ -71,7 +76,18 @@ bool is_nifti_name(const std::filesystem::path& file);
 inline Mat3 lps_ras_flip() { return Vec3(-1.0, -1.0, 1.0).asDiagonal(); }
 
 // gzip (RFC 1952) of `bytes`, compressed fast (images are large: runs only, in pieces on every thread), with no time
-// stamp: the same bytes for the same input on any number of threads.
+// stamp: the same bytes for the same input on any number of threads. GzipParts keeps the stream in parts, to be
+// written one after another; gzip() joins them.
+class GzipParts {
+ public:
+  explicit GzipParts(std::span<const char> bytes);
+  std::vector<std::span<const char>> parts() const;
+
+ private:
+  std::string header_, trailer_;
+  std::vector<std::unique_ptr<char[]>> pieces_;
+  std::vector<std::size_t> sizes_;
+};
 std::string gzip(std::span<const char> bytes);
 // The bytes, gunzipped (a truncated or corrupt stream is an InputError naming `source`).
 std::string gunzip(const std::string& bytes, const std::string& source);

@@ -4,9 +4,15 @@
 // of them took 4 of the 17 s of a 256^3 field). This allocator asks Linux for transparent huge pages (madvise
 // MADV_HUGEPAGE on 2 MiB-aligned memory), one fault per 2 MiB where the kernel allows it; elsewhere, and for small
 // buffers, it is plain operator new.
+//
+// A LargeVector's new elements are default-initialised, as by new T[n]: LargeVector<double>(n) and resize(n) leave
+// numbers unset, so that the first touch of each page is the fill that follows, on every thread (large_vector() below)
+// rather than a serial zeroing first. Fill what you size.
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <new>
+#include <utility>
 #include <vector>
 
 #if defined(__linux__)
@@ -44,6 +50,14 @@ struct HugePageAllocator {
       ::operator delete(memory);
   }
   template <class U>
+  void construct(U* at) noexcept {
+    ::new (static_cast<void*>(at)) U;
+  }
+  template <class U, class... Arguments>
+  void construct(U* at, Arguments&&... arguments) {
+    ::new (static_cast<void*>(at)) U(std::forward<Arguments>(arguments)...);
+  }
+  template <class U>
   bool operator==(const HugePageAllocator<U>&) const noexcept {
     return true;
   }
@@ -51,5 +65,15 @@ struct HugePageAllocator {
 
 template <class T>
 using LargeVector = std::vector<T, HugePageAllocator<T>>;
+
+// n copies of value, written on every thread (each thread first-touches its own pages).
+template <class T>
+LargeVector<T> large_vector(std::size_t n, const T& value) {
+  LargeVector<T> out(n);
+  const auto count = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t i = 0; i < count; ++i) out[static_cast<std::size_t>(i)] = value;
+  return out;
+}
 
 }  // namespace mtled
