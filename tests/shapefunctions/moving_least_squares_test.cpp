@@ -108,12 +108,7 @@ TEST(MlsShapeFunctions, LinearInterpolationIsTheShapeFunctionSumsOnEverySimdTarg
       ASSERT_EQ(mls->interpolate(x, support.nodes, support.radii, field, value, &gradient).ok, full.fit.ok);
       if (!full.fit.ok) continue;
       sizes.push_back(support.nodes.size());
-      Vec3 expected = Vec3::Zero();
-      Mat3 expected_gradient = Mat3::Zero();
-      for (std::size_t i = 0; i < field.size(); ++i) {
-        expected += full.values[i] * field[i];
-        expected_gradient += field[i] * full.gradients[i].transpose();
-      }
+      const auto [expected, expected_gradient] = field_sums(full, field);
       const double tolerance = roundoff_bound(full.fit, support.nodes.size());
       EXPECT_LE((value - expected).cwiseAbs().maxCoeff(), tolerance) << target << ", point " << k;
       EXPECT_LE((gradient - expected_gradient).cwiseAbs().maxCoeff(), tolerance / support.mean_radius())

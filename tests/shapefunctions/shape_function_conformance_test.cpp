@@ -166,12 +166,7 @@ TEST_P(ShapeFunctionConformance, InterpolateAgreesWithTheShapeFunctionSums) {
       EXPECT_EQ(gradient, Mat3::Zero());
       continue;
     }
-    Vec3 expected = Vec3::Zero();
-    Mat3 expected_gradient = Mat3::Zero();
-    for (std::size_t i = 0; i < field.size(); ++i) {
-      expected += full.values[i] * field[i];
-      expected_gradient += field[i] * full.gradients[i].transpose();
-    }
+    const auto [expected, expected_gradient] = field_sums(full, field);
     const double tolerance = roundoff_bound(full.fit, support.nodes.size());
     EXPECT_LE((value - expected).cwiseAbs().maxCoeff(), tolerance) << "at point " << k;
     EXPECT_LE((value_only - expected).cwiseAbs().maxCoeff(), tolerance) << "at point " << k;

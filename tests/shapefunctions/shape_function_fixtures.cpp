@@ -91,6 +91,15 @@ bool all_finite(const Evaluation& evaluation) {
   return std::isfinite(evaluation.fit.reciprocal_condition);
 }
 
+FieldSums field_sums(const Evaluation& evaluation, const std::vector<Vec3>& field) {
+  FieldSums sums;
+  for (std::size_t i = 0; i < field.size(); ++i) {
+    sums.value += evaluation.values[i] * field[i];
+    sums.gradient += field[i] * evaluation.gradients[i].transpose();
+  }
+  return sums;
+}
+
 // D(h) = g + a h^2 + O(h^4) + round-off / h, so |D(2h) - D(h)| ~ 3 |a| h^2 estimates the truncation error
 // of D(h) from the data; the analytic gradient must agree with D(h) within that estimate plus the round-off of
 // the difference quotient. The expansion needs the values to be smooth over the stencil, so points where a

@@ -60,6 +60,13 @@ double roundoff_bound(const ShapeFunctionFit& fit, std::size_t n);
 
 bool all_finite(const Evaluation& evaluation);
 
+// sum_I N_I v_I and sum_I v_I dN_I/dx^T from an evaluation with gradients: what interpolate() must return.
+struct FieldSums {
+  Vec3 value = Vec3::Zero();
+  Mat3 gradient = Mat3::Zero();
+};
+FieldSums field_sums(const Evaluation& evaluation, const std::vector<Vec3>& field);
+
 // Compares the analytic gradients with central differences of the values at `points` random points of the
 // cloud (two thirds at least one cell inside, where the fit must succeed; the rest anywhere). Adds a test
 // failure for each disagreement; returns the worst |grad N - D(h)| x support radius.
