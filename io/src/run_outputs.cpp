@@ -29,7 +29,9 @@ SceneSection output_section() {
     d.string_list("cell_data")
         .defaults(json::array())
         .choices(field_names)
-        .doc("per-cell fields in result.vtu, evaluated at each tet's integration points (averaged)");
+        .doc(
+            "per-cell fields in result.vtu and the step files, evaluated at each tet's integration points "
+            "(averaged)");
     d.string("vtu_format")
         .defaults("binary")
         .choices({"binary", "ascii"})
@@ -152,7 +154,10 @@ void HistoryWriter::record_equilibrium(const StepRecord& step) {
 // ---- snapshots
 
 SnapshotWriter::SnapshotWriter(const OutputFolder& folder, const Parameters& output)
-    : folder_(folder), every_(output.integer("every_steps")), style_(vtu_style(output)) {}
+    : folder_(folder),
+      every_(output.integer("every_steps")),
+      style_(vtu_style(output)),
+      cell_data_(output.string_list("cell_data")) {}
 
 void SnapshotWriter::before_run(const StepRecord& initial) { snapshot(initial); }  // the series starts with it
 
@@ -175,7 +180,8 @@ void SnapshotWriter::snapshot(const StepRecord& step) {
   const std::string file = fmt::format("steps/{:06d}.vtu", step.step);
   std::vector<double> u(step.u.size());
   step.model->interpolate(step.u, u);
-  folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, step.model->mesh(), u, {}, style_); });
+  const std::vector<CellField> fields = cell_fields(*step.model, step.u, cell_data_);
+  folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, step.model->mesh(), u, fields, style_); });
   snapshots_.emplace_back(step.time, file);
   last_snapshot_ = step.step;
 }

@@ -1,5 +1,5 @@
 """ParaView itself reads what a run writes: result.vtu and series.pvd with its step files, in metres and in
-millimetres, each array under the name, size and unit docs/files.md gives (the cell fields in result.vtu only). Run by ParaView's Python (pvpython,
+millimetres, each array under the name, size and unit docs/files.md gives. Run by ParaView's Python (pvpython,
 Debian python3-paraview) on the uniaxial Ogden cube, whose exact answer is known: the 10 mm cube compressed to 8 mm
 moves homogeneously, u = ((l - 1) x, (l - 1) y, -0.2 z) with the lateral stretch l = 1.1153 (docs/validation.md), so
 the displacement ParaView reads at every point must be that field, within the run's own accuracy (0.1% of the
@@ -44,14 +44,14 @@ def arrays(data):
     return out
 
 
-def check_result(data, nodes, tets, unit, failures, label, cell_fields=CELL_FIELDS):
+def check_result(data, nodes, tets, unit, failures, label):
     """Sizes, arrays and the exact displacement of one dataset; `unit` is metres per file length."""
     if data.GetNumberOfPoints() != nodes or data.GetNumberOfCells() != tets:
         failures.append(f"{label}: {data.GetNumberOfPoints()} points and {data.GetNumberOfCells()} cells, "
                         f"expected {nodes} nodes (summary.json) and {tets} tets (result.vtu)")
     found = arrays(data)
     for kind, name in [("points", "displacement"), ("points", "region"), ("cells", "region")] + \
-            [("cells", f) for f in cell_fields]:
+            [("cells", f) for f in CELL_FIELDS]:
         entry = found.get((kind, name))
         expected = nodes if kind == "points" else tets
         if entry is None or entry[0] != COMPONENTS[name] or entry[1] != expected:
@@ -90,9 +90,7 @@ def check_run(mtled, source, folder, unit_name, failures):
         failures.append(f"series.pvd ({unit_name}): {len(times)} times from {times[:1]}, {len(steps)} step files")
         return
     _, last = read(folder / "series.pvd", time=times[-1])
-    # The step files hold the displacement and the regions; the cell fields are result.vtu's (docs/files.md).
-    last_displacement = check_result(last, nodes, tets, unit, failures, f"series.pvd at t = {times[-1]} ({unit_name})",
-                                     cell_fields=[])
+    last_displacement = check_result(last, nodes, tets, unit, failures, f"series.pvd at t = {times[-1]} ({unit_name})")
     if any(last_displacement.GetTuple3(i) != final.GetTuple3(i) for i in range(nodes)):
         failures.append(f"series.pvd ({unit_name}): the last step is not result.vtu")
 

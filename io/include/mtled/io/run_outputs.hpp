@@ -73,6 +73,7 @@ class SnapshotWriter final : public OutputWriter {
   const OutputFolder& folder_;
   long every_;
   VtuStyle style_;
+  std::vector<std::string> cell_data_;  // the cell fields each step file carries, as result.vtu does
   long last_snapshot_ = -1;
   std::vector<std::pair<double, std::string>> snapshots_;
 };
