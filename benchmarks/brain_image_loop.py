@@ -12,7 +12,7 @@ written by scripts/label_maps/write_label_map.py brain IMAGE --size N). Prints, 
 - along the needle's path in the deformed state, how far the resampling field moves each voxel centre across the
   path: the tissue there must come from the path itself (the shaft drives the tissue along itself), within one
   voxel.
-Needs numpy and VTK (Debian python3-numpy, python3-vtk9).
+Needs numpy and VTK (Debian python3-numpy, python3-paraview).
 """
 import argparse
 import json

@@ -10,7 +10,7 @@ two in order, the second drawn upwards. The field is the run's interpolated disp
 each background tet (linear in the tet, as ParaView's slice shows it), in the reference configuration or, with
 --deformed, where the tissue is after the run. Colours run from dark blue (zero) to yellow (--max, default the
 largest value on the cut); the background outside the body is white.
-Needs numpy, PIL and VTK (Debian python3-numpy, python3-pil, python3-vtk9).
+Needs numpy, PIL and VTK (Debian python3-numpy, python3-pil, and python3-paraview, whose `vtk` module it uses).
 """
 import argparse
 import sys

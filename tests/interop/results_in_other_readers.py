@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""mtled's result files read by independent readers: meshio and VTK (Debian's python3-meshio, python3-vtk9).
+"""mtled's result files read by independent readers: meshio and VTK (Debian's python3-meshio, and the VTK of
+python3-paraview).
 
 Runs a 10 mm cube whose every node is prescribed the affine displacement u = d + G X, writing a series, once
 with binary (zlib) and once with ASCII files. Each result.vtu, read by meshio and by VTK, must hold the
