@@ -10,6 +10,7 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -23,6 +24,18 @@ namespace fs = std::filesystem;
 namespace mtled {
 
 namespace {
+
+// A gzip stream (gzip() below) kept in parts, header, pieces and trailer, to be written one after another.
+class GzipParts {
+ public:
+  explicit GzipParts(std::span<const char> bytes);
+  std::vector<std::span<const char>> parts() const;
+
+ private:
+  std::string header_, trailer_;
+  std::vector<std::unique_ptr<char[]>> pieces_;
+  std::vector<std::size_t> sizes_;
+};
 
 static_assert(std::endian::native == std::endian::little, "the headers written here say little endian");
 

@@ -8,7 +8,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
-#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -76,18 +75,7 @@ bool is_nifti_name(const std::filesystem::path& file);
 inline Mat3 lps_ras_flip() { return Vec3(-1.0, -1.0, 1.0).asDiagonal(); }
 
 // gzip (RFC 1952) of `bytes`, compressed fast (images are large: runs only, in pieces on every thread), with no time
-// stamp: the same bytes for the same input on any number of threads. GzipParts keeps the stream in parts, to be
-// written one after another; gzip() joins them.
-class GzipParts {
- public:
-  explicit GzipParts(std::span<const char> bytes);
-  std::vector<std::span<const char>> parts() const;
-
- private:
-  std::string header_, trailer_;
-  std::vector<std::unique_ptr<char[]>> pieces_;
-  std::vector<std::size_t> sizes_;
-};
+// stamp: the same bytes for the same input on any number of threads.
 std::string gzip(std::span<const char> bytes);
 // The bytes, gunzipped (a truncated or corrupt stream is an InputError naming `source`).
 std::string gunzip(const std::string& bytes, const std::string& source);
