@@ -276,6 +276,20 @@ TEST(Cli, TimeStepTenTimesTheStableOneIsDetected) {
   }
 }
 
+// A run into a folder an unstable run left its last good state in: the folder then holds one run's outputs, so the
+// old state goes (a viewer opening it beside the new result.vtu would show a failure that did not happen).
+TEST(Cli, ASuccessfulRunClearsALastGoodStateLeftByAnEarlierOne) {
+  const fs::path out = test::scratch_dir("cli-rerun") / "out";
+  const auto unstable = test::run_mtled({"run", kSmallCube.string(), "-o", out.string(), "--no-progress", "--set",
+                                         "/integrator/time_step_factor=10", "--set", "/monitors/stable_step=\"stop\""});
+  ASSERT_EQ(unstable.exit_code, 3) << unstable.output;
+  ASSERT_TRUE(fs::exists(out / "last_good_state.vtu"));
+  const auto ok = test::run_mtled({"run", kSmallCube.string(), "-o", out.string(), "--no-progress"});
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_TRUE(fs::exists(out / "result.vtu"));
+  EXPECT_FALSE(fs::exists(out / "last_good_state.vtu"));
+}
+
 // A compression of 40% applied in two load steps moves the top face 2 mm a step, more than the cloud's mesh size
 // (1.93 mm: 335 nodes in the 10 mm cube): the tets under it invert while the ramp runs. The stop names the ramp's
 // setting and how to slow it, and the same compression over 100 load steps (0.04 mm a step) runs through. Central
@@ -398,7 +412,7 @@ TEST(Cli, ReactionsAreWrittenAtEachRelaxedLoad) {
 }
 
 // A boundary condition that pushes the three nodes at the top's centre 6 mm into the 10 mm cube: every
-// integration point's J stays positive (the run used to end "ok"), but the background tets around the nodes
+// integration point's J stays positive, but the background tets around the nodes
 // turn inside out. With /monitors/inversion = "stop" (the default) the run ends unstable naming where; "warn" warns
 // and records the folded tets in summary.json. The plain compression folds nothing.
 TEST(Cli, MaterialFoldedBetweenIntegrationPointsIsReported) {
