@@ -79,6 +79,7 @@ def main():
     parser.add_argument("--only", help="comma-separated case numbers (1-based) to run")
     parser.add_argument("--reuse", action="store_true", help="keep the runs already finished in --out")
     args = parser.parse_args()
+    args.out = args.out.resolve()  # the label-map cases name their map by path, which a scene takes from its folder
     args.out.mkdir(parents=True, exist_ok=True)
     drag_limit = {"scene": None, "none": "null"}.get(args.drag_limit, args.drag_limit)
 

@@ -67,6 +67,8 @@ std::string_view to_string(ParameterType type) {
     case ParameterType::string_list: return "string_list";
     case ParameterType::node_set: return "node_set";
     case ParameterType::file: return "file";
+    case ParameterType::number_map:
+      return "number_map";
   }
   return "unknown";
 }
@@ -98,15 +100,16 @@ std::string NumericRange::describe() const {
 // ------------------------------------------------------------------------------------------------ specs
 
 json ParameterSpec::to_json() const {
-  json j = {{"name", name},
-            {"type", std::string(to_string(type))},
-            {"required", required},
-            {"unit", unit},
-            {"range", type == ParameterType::number || type == ParameterType::integer ||
-                              type == ParameterType::number_list || type == ParameterType::vector3
-                          ? range.describe()
-                          : std::string("any")},
-            {"doc", doc}};
+  json j = {
+      {"name", name},
+      {"type", std::string(to_string(type))},
+      {"required", required},
+      {"unit", unit},
+      {"range", type == ParameterType::number || type == ParameterType::integer || type == ParameterType::number_list ||
+                        type == ParameterType::number_map || type == ParameterType::vector3
+                    ? range.describe()
+                    : std::string("any")},
+      {"doc", doc}};
   j["default"] = default_value ? *default_value : json(nullptr);
   if (!choices.empty()) j["choices"] = choices;
   return j;
@@ -132,6 +135,12 @@ json ParameterSpec::to_json_schema() const {
       json item = {{"type", "number"}};
       add_bounds(item);
       s = {{"type", "array"}, {"items", item}};
+      break;
+    }
+    case ParameterType::number_map: {
+      json item = {{"type", "number"}};
+      add_bounds(item);
+      s = {{"type", "object"}, {"additionalProperties", item}};
       break;
     }
     case ParameterType::string_list: s = {{"type", "array"}, {"items", {{"type", "string"}}}}; break;
@@ -224,6 +233,9 @@ ParameterBuilder ComponentDeclaration::vector3(std::string name) { return add_ne
 ParameterBuilder ComponentDeclaration::number_list(std::string name) {
   return add_new(std::move(name), ParameterType::number_list);
 }
+ParameterBuilder ComponentDeclaration::number_map(std::string name) {
+  return add_new(std::move(name), ParameterType::number_map);
+}
 ParameterBuilder ComponentDeclaration::string_list(std::string name) {
   return add_new(std::move(name), ParameterType::string_list).unit("1");
 }
@@ -302,6 +314,9 @@ Vec3 Parameters::vector3(std::string_view name) const {
 }
 std::vector<double> Parameters::number_list(std::string_view name) const {
   return value(name, ParameterType::number_list).get<std::vector<double>>();
+}
+std::map<std::string, double> Parameters::number_map(std::string_view name) const {
+  return value(name, ParameterType::number_map).get<std::map<std::string, double>>();
 }
 std::vector<std::string> Parameters::string_list(std::string_view name) const {
   return value(name, ParameterType::string_list).get<std::vector<std::string>>();
@@ -400,6 +415,24 @@ bool check_number_list(const ParameterSpec& spec, const json& v, const std::stri
   return ok;
 }
 
+// Each entry of an object of named numbers: a finite number in the spec's range (every bad entry named).
+bool check_number_map(const ParameterSpec& spec, const json& v, const std::string& where,
+                      std::vector<Problem>& problems) {
+  bool ok = true;
+  for (const auto& [key, entry] : v.items()) {
+    const std::string at = where + "/" + pointer_escape(key);
+    if (!is_number(entry)) {
+      problems.push_back({at, fmt::format("expected a number{}, got {} {}", with_unit(spec), json_type_name(entry),
+                                          short_value(entry))});
+      ok = false;
+    } else if (!spec.range.contains(entry.get<double>())) {
+      problems.push_back({at, range_message(spec, format_number(entry.get<double>()))});
+      ok = false;
+    }
+  }
+  return ok;
+}
+
 // Each entry of a list of strings: a string among the spec's choices, if it has any (every bad entry named).
 bool check_string_list(const ParameterSpec& spec, const json& v, const std::string& where,
                        std::vector<Problem>& problems) {
@@ -469,6 +502,9 @@ bool check_value(const ParameterSpec& spec, const json& v, const std::string& wh
     case ParameterType::number_list:
       if (!v.is_array()) return wrong_type("a list of numbers" + with_unit(spec));
       return check_number_list(spec, v, where, problems);
+    case ParameterType::number_map:
+      if (!v.is_object()) return wrong_type("an object of named numbers {\"name\": value}" + with_unit(spec));
+      return check_number_map(spec, v, where, problems);
     case ParameterType::string_list:
       if (!v.is_array()) return wrong_type("a list of strings");
       return check_string_list(spec, v, where, problems);

@@ -90,6 +90,26 @@ TEST(Parameters, NotAnObject) {
   EXPECT_EQ(problems[0].where, "/needle");
 }
 
+// A map of named numbers: each entry checked against the range under its own pointer, the names left to the
+// component; not an object is a type error.
+TEST(Parameters, NumberMapEntriesAreCheckedOneByOne) {
+  ComponentDeclaration d("sample", Category::mesh);
+  d.number_map("sizes").unit("m").positive().optional().doc("sizes by region");
+  std::vector<Problem> problems;
+  const Parameters p = validate_parameters(d, {{"type", "sample"}, {"sizes", {{"stem", 0.001}, {"cerebellum", 0.002}}}},
+                                           "/mesh", problems);
+  ASSERT_TRUE(problems.empty()) << messages(problems);
+  EXPECT_EQ(p.number_map("sizes"), (std::map<std::string, double>{{"cerebellum", 0.002}, {"stem", 0.001}}));
+  validate_parameters(d, {{"type", "sample"}, {"sizes", {{"stem", -1}, {"a/b", "small"}}}}, "/mesh", problems);
+  validate_parameters(d, {{"type", "sample"}, {"sizes", {0.001}}}, "/mesh", problems);
+  const std::string text = messages(problems);
+  EXPECT_EQ(problems.size(), 3u) << text;
+  EXPECT_NE(text.find("/mesh/sizes/stem: -1 is out of range: allowed > 0 m"), std::string::npos) << text;
+  EXPECT_NE(text.find("/mesh/sizes/a~1b: expected a number m, got string \"small\""), std::string::npos) << text;
+  EXPECT_NE(text.find("/mesh/sizes: expected an object of named numbers"), std::string::npos) << text;
+  EXPECT_EQ(d.find("sizes")->to_json_schema()["additionalProperties"]["exclusiveMinimum"], 0.0);
+}
+
 TEST(Parameters, RangeDescriptions) {
   NumericRange r;
   EXPECT_EQ(r.describe(), "any");

@@ -5,6 +5,7 @@
 #include "mtled/json.hpp"
 
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -40,7 +41,20 @@ const std::vector<Category>& plugin_categories();
 
 // `file`: a path (a string in the scene); a relative one is taken from the scene file's folder when the scene is
 // validated, which also checks that the file exists, so a component reads Parameters::file as an absolute path.
-enum class ParameterType { number, integer, boolean, string, vector3, number_list, string_list, node_set, file };
+// `number_map`: an object of named numbers ({"brain_stem": 0.0012}), each in the spec's range; the names are the
+// component's to check (regions, segments).
+enum class ParameterType {
+  number,
+  integer,
+  boolean,
+  string,
+  vector3,
+  number_list,
+  string_list,
+  node_set,
+  file,
+  number_map
+};
 
 std::string_view to_string(ParameterType type);
 
@@ -106,6 +120,7 @@ class ComponentDeclaration {
   ParameterBuilder string(std::string name);
   ParameterBuilder vector3(std::string name);
   ParameterBuilder number_list(std::string name);
+  ParameterBuilder number_map(std::string name);
   ParameterBuilder string_list(std::string name);
   ParameterBuilder node_set(std::string name);
   ParameterBuilder file(std::string name);
@@ -149,6 +164,7 @@ class Parameters {
   std::string string(std::string_view name) const;
   Vec3 vector3(std::string_view name) const;
   std::vector<double> number_list(std::string_view name) const;
+  std::map<std::string, double> number_map(std::string_view name) const;
   std::vector<std::string> string_list(std::string_view name) const;
   NodeSelector node_set(std::string_view name) const;
   std::filesystem::path file(std::string_view name) const;  // as validate_scene resolved it

@@ -120,6 +120,43 @@ TEST(LabelMap, TheMeshedVolumeIsTheLabelledVolume) {
   for (const auto& p : right.points) EXPECT_GT(p[0], -0.5e-3);
 }
 
+// region_mesh_size refines one region: flat facets inside a curved surface cut off a volume that falls as the facet
+// size squared, so at a third of the body's size the right sphere's volume error must fall below a third of what it
+// was (a ninth ideally; the voxels' staircase and the surface-distance criterion keep a floor), while the left sphere,
+// left at the body's size, keeps its error. Regions are numbered in label order whatever the mesh.
+TEST(LabelMap, ARegionMeshSizeRefinesThatRegionsBoundary) {
+  const fs::path file = write_label_map("two_spheres", "two.seg.nrrd", "--size 40");
+  const LabelImage image = read_label_image(file);
+  const double voxel = std::pow(0.4e-3, 3);
+  const auto error = [&](const TetMesh& mesh, std::int32_t label) {
+    const double labelled = static_cast<double>(image.voxel_counts().at(label)) * voxel;
+    return std::abs(region_volume(mesh, image.segment_names.at(label)) / labelled - 1.0);
+  };
+  const json block = {{"path", file.string()}, {"mesh_size", 1.5e-3}};
+  const TetMesh coarse = mesh_label_map(block);
+  json refined_block = block;
+  refined_block["region_mesh_size"] = {{image.segment_names.at(2), 0.5e-3}};
+  const TetMesh refined = mesh_label_map(refined_block);
+  ASSERT_EQ(refined.region_names, (std::vector<std::string>{image.segment_names.at(1), image.segment_names.at(2)}));
+  std::printf("volume errors: left %.4f -> %.4f, right %.4f -> %.4f; nodes %d -> %d\n", error(coarse, 1),
+              error(refined, 1), error(coarse, 2), error(refined, 2), coarse.node_count(), refined.node_count());
+  EXPECT_LT(error(refined, 2), error(coarse, 2) / 3.0);
+  EXPECT_NEAR(error(refined, 1), error(coarse, 1), 0.25 * error(coarse, 1));
+
+  refined_block["region_mesh_size"] = {{"rigth", 0.5e-3}};
+  EXPECT_THROW(
+      {
+        try {
+          mesh_label_map(refined_block);
+        } catch (const InputError& e) {
+          EXPECT_NE(std::string(e.what()).find("/region_mesh_size/rigth"), std::string::npos) << e.what();
+          EXPECT_NE(std::string(e.what()).find("did you mean \"right\""), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      InputError);
+}
+
 // "smooth" puts the boundary on a smooth surface through the voxels: on a sphere of 16.8 voxels' radius the surface
 // nodes lie closer to the true sphere than the staircase-following mesh's do (the voxel centres inside it are the
 // labels; the true surface is the sphere of radius 0.35 x 16 mm).
