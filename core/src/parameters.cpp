@@ -398,38 +398,34 @@ bool check_choice(const ParameterSpec& spec, const json& v, const std::string& w
 
 bool is_number(const json& v) { return v.is_number() && std::isfinite(v.get<double>()); }
 
-// Each entry of a list of numbers: a finite number in the spec's range (every bad entry named).
+// One entry of a list or map of numbers: a finite number in the spec's range, named by its own pointer.
+bool check_number_entry(const ParameterSpec& spec, const json& entry, const std::string& at,
+                        std::vector<Problem>& problems) {
+  if (!is_number(entry)) {
+    problems.push_back({at, fmt::format("expected a number{}, got {} {}", with_unit(spec), json_type_name(entry),
+                                        short_value(entry))});
+    return false;
+  }
+  if (!spec.range.contains(entry.get<double>())) {
+    problems.push_back({at, range_message(spec, format_number(entry.get<double>()))});
+    return false;
+  }
+  return true;
+}
+
+// Each entry of a list of numbers, or of an object of named numbers (every bad entry named).
 bool check_number_list(const ParameterSpec& spec, const json& v, const std::string& where,
                        std::vector<Problem>& problems) {
   bool ok = true;
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    const std::string at = where + "/" + std::to_string(i);
-    if (!is_number(v[i])) {
-      problems.push_back({at, fmt::format("expected a number, got {} {}", json_type_name(v[i]), short_value(v[i]))});
-      ok = false;
-    } else if (!spec.range.contains(v[i].get<double>())) {
-      problems.push_back({at, range_message(spec, format_number(v[i].get<double>()))});
-      ok = false;
-    }
-  }
+  for (std::size_t i = 0; i < v.size(); ++i)
+    ok = check_number_entry(spec, v[i], where + "/" + std::to_string(i), problems) && ok;
   return ok;
 }
-
-// Each entry of an object of named numbers: a finite number in the spec's range (every bad entry named).
 bool check_number_map(const ParameterSpec& spec, const json& v, const std::string& where,
                       std::vector<Problem>& problems) {
   bool ok = true;
-  for (const auto& [key, entry] : v.items()) {
-    const std::string at = where + "/" + pointer_escape(key);
-    if (!is_number(entry)) {
-      problems.push_back({at, fmt::format("expected a number{}, got {} {}", with_unit(spec), json_type_name(entry),
-                                          short_value(entry))});
-      ok = false;
-    } else if (!spec.range.contains(entry.get<double>())) {
-      problems.push_back({at, range_message(spec, format_number(entry.get<double>()))});
-      ok = false;
-    }
-  }
+  for (const auto& [key, entry] : v.items())
+    ok = check_number_entry(spec, entry, where + "/" + pointer_escape(key), problems) && ok;
   return ok;
 }
 
