@@ -1,7 +1,7 @@
-// The internal-force kernel (Model::internal_forces) on the default scene's cloud (the paper's coarse grid of
+// The internal-force kernel (ForceKernel::internal_forces) on the default scene's cloud (the paper's coarse grid of
 // the small sample, about 7,500 nodes and 38,000 integration points), for 1 and 2 threads. Counters:
 // integration-point updates per second and the kernel's memory traffic per second, counted as the bytes the
-// kernel must move once per call (Model::streamed_bytes_per_force_evaluation). At the end, the constraint
+// kernel must move once per call (ForceKernel::streamed_bytes_per_force_evaluation). At the end, the constraint
 // projection of that cloud's fixed face.
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -47,7 +47,8 @@ Simulation& simulation_for(int threads, const std::string& precision) {
 void internal_forces(benchmark::State& state, const std::string& precision) {
   const int threads = static_cast<int>(state.range(0));
   Simulation& simulation = simulation_for(threads, precision);
-  const Model& model = simulation.model();
+  const Discretisation& model = simulation.discretisation();
+  const ForceKernel& kernel = simulation.force_kernel();
   const std::size_t dofs = 3 * static_cast<std::size_t>(model.node_count());
   // A smooth field of about 1% strain: every integration point does real work.
   std::vector<double> u(dofs), f(dofs);
@@ -56,12 +57,12 @@ void internal_forces(benchmark::State& state, const std::string& precision) {
   for (Index i = 0; i < model.node_count(); ++i)
     for (int k = 0; k < 3; ++k) u[3 * i + k] = 0.01 * model.nodes()[i][k] * (k == 2 ? -1.0 : 0.5) + noise(random);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(model.internal_forces(u, f));
+    benchmark::DoNotOptimize(kernel.internal_forces(u, f));
     benchmark::ClobberMemory();
   }
-  const double entries = static_cast<double>(model.ip_supports().entries());
-  const double ips = static_cast<double>(model.integration_point_count());
-  const auto bytes = static_cast<double>(model.streamed_bytes_per_force_evaluation());
+  const double entries = static_cast<double>(model.gradients().entries());
+  const double ips = static_cast<double>(model.points().count());
+  const auto bytes = static_cast<double>(kernel.streamed_bytes_per_force_evaluation());
   state.counters["ip_updates_per_s"] = benchmark::Counter(ips, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["bytes_per_s"] = benchmark::Counter(bytes, benchmark::Counter::kIsIterationInvariantRate);
   state.counters["support_mean"] = entries / ips;
@@ -89,7 +90,7 @@ BENCHMARK(BM_InternalForcesBaseline)->Arg(1)->ArgName("threads")->Unit(benchmark
 // stream evicts it between steps.
 void BM_ConstraintProjection(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
-  const Model& model = simulation_for(threads, "single").model();
+  const Discretisation& model = simulation_for(threads, "single").discretisation();
   NodalConstraints bottom;  // the scene's fixed boundary, without the needle's driven nodes
   bottom.name = "bottom";
   for (const Index node : model.mesh().node_sets.at("bottom")) bottom.add_node(node, Vec3::Zero());

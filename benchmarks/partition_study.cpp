@@ -73,18 +73,19 @@ struct Exchange {
 };
 
 // One table row: the partition into n parts and the step time it projects.
-void print_row(const mtled::Model& model, const Costs& costs, const Exchange& exchange, double one_rank, int n) {
+void print_row(const mtled::Discretisation& model, const Costs& costs, const Exchange& exchange, double one_rank,
+               int n) {
   using namespace mtled;
   const double latency_s = exchange.latency_s, bandwidth = exchange.bandwidth;
   const double product_bytes = exchange.product_bytes;
   const long whole_every = exchange.whole_every;
   const auto nodes = static_cast<double>(model.node_count());
   const MeshPartition partition = partition_mesh(model.mesh(), n);
-  std::vector<int> point_part(static_cast<std::size_t>(model.integration_point_count()));
+  std::vector<int> point_part(static_cast<std::size_t>(model.points().count()));
   for (std::size_t p = 0; p < point_part.size(); ++p)
-    point_part[p] = partition.tet_part[static_cast<std::size_t>(model.ip_tets()[p])];
-  const PartSizes sizes = part_sizes(partition, point_part, model.ip_supports());
-  const double mean_points = static_cast<double>(model.integration_point_count()) / n;
+    point_part[p] = partition.tet_part[static_cast<std::size_t>(model.points().tets[p])];
+  const PartSizes sizes = part_sizes(partition, point_part, model.gradients());
+  const double mean_points = static_cast<double>(model.points().count()) / n;
   const double imbalance =
       static_cast<double>(*std::max_element(sizes.points.begin(), sizes.points.end())) / mean_points;
   const double mean_ghosts =
@@ -146,7 +147,7 @@ int study(int argc, char** argv) {
   PluginCatalog catalog(plugin_search_path({}, scene_plugin_paths(document)));
   const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
   const Simulation simulation(scene, catalog);
-  const Model& model = simulation.model();
+  const Discretisation& model = simulation.discretisation();
   // The steps on which a monitor reads the whole displacement: the fold check's (the most frequent; the stable-step
   // estimate's are rarer), or the snapshots' when more frequent.
   // The constraint products summed over the ranks every step: 8 bytes per constrained row and component.
@@ -157,12 +158,13 @@ int study(int argc, char** argv) {
   long whole_every = scene.section("monitors").integer("inversion_every_steps");
   if (const long snapshots = scene.section("output").integer("every_steps"); snapshots > 0)
     whole_every = whole_every > 0 ? std::min(whole_every, snapshots) : snapshots;
-  fmt::print("{}: {} nodes, {} integration points; one rank: force kernel {:.3f} ms per evaluation, {:.2f} "
-             "evaluations per step, the update {:.3f} ms and the rest {:.3f} ms per step; network assumed {:.1f} us, "
-             "{:.1f} GB/s; the whole displacement gathered every {} steps, {:.0f} KB of constraint products summed per step\n",
-             positional[0], model.node_count(), model.integration_point_count(), costs.kernel_s * 1e3,
-             costs.evaluations_per_step, costs.update_per_step_s * 1e3, costs.repeated_per_step_s * 1e3,
-             latency_s * 1e6, bandwidth / 1e9, whole_every, product_bytes / 1e3);
+  fmt::print(
+      "{}: {} nodes, {} integration points; one rank: force kernel {:.3f} ms per evaluation, {:.2f} "
+      "evaluations per step, the update {:.3f} ms and the rest {:.3f} ms per step; network assumed {:.1f} us, "
+      "{:.1f} GB/s; the whole displacement gathered every {} steps, {:.0f} KB of constraint products summed per step\n",
+      positional[0], model.node_count(), model.points().count(), costs.kernel_s * 1e3, costs.evaluations_per_step,
+      costs.update_per_step_s * 1e3, costs.repeated_per_step_s * 1e3, latency_s * 1e6, bandwidth / 1e9, whole_every,
+      product_bytes / 1e3);
   fmt::print("| parts | imbalance | ghost nodes per part (mean / largest) | boundary points (largest share) | neighbours "
              "(largest) | halo KB per evaluation and per step (largest rank) | whole gather KB (largest rank) | projected "
              "ms per step | speed-up |\n");

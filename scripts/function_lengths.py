@@ -49,7 +49,7 @@ def main():
     for folder in folders:
         root = pathlib.Path(folder)
         for path in [root] if root.is_file() else sorted(root.rglob("*")):
-            if path.suffix in (".cpp", ".hpp", ".h"):
+            if path.suffix in (".cpp", ".hpp", ".h", ".cu", ".cuh"):
                 found += long_functions(path, limit)
     for length, where, name in sorted(found, reverse=True):
         print(f"{length:4d} lines  {where}  {name}")

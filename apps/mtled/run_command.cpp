@@ -109,7 +109,7 @@ class SceneRun {
     const bool inverted = e.diagnostic().what == "inverted_material";
     std::vector<CellField> folds;
     if (folded_ && !folded_->per_tet.empty()) folds.push_back({"folded", 1, folded_->per_tet});
-    write_state(folder_, "last_good_state.vtu", simulation_->model().view(),
+    write_state(folder_, "last_good_state.vtu", simulation_->force_kernel(),
                 inverted ? simulation_->previous_displacement() : simulation_->displacement(), scene_.section("output"),
                 false, folds);
     // An inverted point beside the needle: where, against the needle, and what the scene can still do about it.
@@ -140,7 +140,7 @@ class SceneRun {
   void check_displacement_field() const {
     const auto like = scene_.section("output").optional_file("displacement_field_like");
     if (!like) return;
-    if (simulation_->model().mesh().coordinate_system.empty())
+    if (simulation_->discretisation().mesh().coordinate_system.empty())
       throw InputError("/output/displacement_field_like",
                        "the mesh records no patient frame (LPS or RAS), so where it lies in the image is not known: "
                        "mesh the image itself (a label_map mesh source records it), or leave this out and run mtled "
@@ -160,7 +160,7 @@ class SceneRun {
     field.output = folder_.path() / (output.string("displacement_field_format") == "nifti" ? "displacement_field.nii.gz"
                                                                                            : "displacement_field.nrrd");
     field.direction = output.string("displacement_field_direction");
-    field.frame = simulation_->model().mesh().coordinate_system;
+    field.frame = simulation_->discretisation().mesh().coordinate_system;
     field.decay_mm = 1e3 * output.number("displacement_field_decay");
     field_command(field, plugin_paths_);
   }
@@ -168,7 +168,7 @@ class SceneRun {
   // result.vtu (and the displacement field the output section asks for), then summary.json with status "ok": the
   // needle, the reactions and the error indicators.
   int succeeded(double solve_time) {
-    const auto u = write_state(folder_, "result.vtu", simulation_->model().view(), simulation_->displacement(),
+    const auto u = write_state(folder_, "result.vtu", simulation_->force_kernel(), simulation_->displacement(),
                                scene_.section("output"), true);
     try {
       write_displacement_field();

@@ -97,7 +97,7 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass,
 
 // Phi's rows for the block's rows, by row and by node (scaled by 1 / m there).
 void ConstraintSystem::fill_phi(Block& block, std::span<const double> mass) const {
-  const SupportRows& psi = model_.node_interpolation();
+  const SupportRows& psi = discretisation_.interpolation();
   ConstraintBlock& phi_block = block.phi;
   const auto m = static_cast<Eigen::Index>(block.rows.size());
   phi_block.rows = m;
@@ -111,7 +111,7 @@ void ConstraintSystem::fill_phi(Block& block, std::span<const double> mass) cons
     const NodalConstraints& set = *sets_[block.rows[r].set];
     if (!set.points().empty()) {
       const Vec3& x = set.points()[block.rows[r].entry];
-      if (!model_.shape_functions_at(x, support, values))
+      if (!discretisation_.shape_functions_at(x, support, values))
         throw std::logic_error(fmt::format("constraint set \"{}\": no shape functions at ({:g}, {:g}, {:g})", set.name,
                                            x[0], x[1], x[2]));
     } else {
@@ -160,7 +160,7 @@ void ConstraintSystem::find_parts(Block& block) const {
     while (root[r] != r) r = root[r] = root[root[r]];
     return r;
   };
-  std::vector<std::int64_t> row_of_node(static_cast<std::size_t>(model_.node_count()), -1);
+  std::vector<std::int64_t> row_of_node(static_cast<std::size_t>(discretisation_.node_count()), -1);
   for (std::size_t r = 0; r < root.size(); ++r)
     for (std::int64_t e = phi_block.row_offsets[r]; e < phi_block.row_offsets[r + 1]; ++e) {
       std::int64_t& seen = row_of_node[static_cast<std::size_t>(phi_block.row_nodes[e])];
@@ -200,7 +200,7 @@ void ConstraintSystem::factorise(Part& part, const ConstraintBlock& phi_block, s
     for (std::int64_t e = phi_block.row_offsets[part.rows[i]]; e < phi_block.row_offsets[part.rows[i] + 1]; ++e)
       triplets.emplace_back(static_cast<Eigen::Index>(i), phi_block.row_nodes[e], phi_block.row_values[e]);
   Eigen::SparseMatrix<double> phi(static_cast<Eigen::Index>(part.rows.size()),
-                                  static_cast<Eigen::Index>(model_.node_count()));
+                                  static_cast<Eigen::Index>(discretisation_.node_count()));
   phi.setFromTriplets(triplets.begin(), triplets.end());
   Eigen::SparseMatrix<double> phi_m = phi;  // scaled by M^-1 column-wise
   for (Eigen::Index j = 0; j < phi_m.outerSize(); ++j)
@@ -340,17 +340,17 @@ class HostVector final : public ConstrainedVector {
 }  // namespace
 
 void ConstraintSystem::enforce(std::span<double> u, double alpha) {
-  HostVector vector(u, model_.team());
+  HostVector vector(u, discretisation_.team());
   enforce(vector, alpha);
 }
 
 void ConstraintSystem::project_out(std::span<double> v) const {
   for (const Block& block : blocks_) {
     std::vector<double> y(block.y.size()), work;
-    constrained_values(block.phi, v, y, model_.team());
+    constrained_values(block.phi, v, y, discretisation_.team());
     for (double& value : y) value = -value;
     solve(block, y, work);
-    add_correction(block.phi, y, v, model_.team());
+    add_correction(block.phi, y, v, discretisation_.team());
   }
 }
 

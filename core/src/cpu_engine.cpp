@@ -4,9 +4,9 @@
 #include <cmath>
 #include <limits>
 
-#include "mtled/explicit_update.hpp"
 #include "mtled/constraints.hpp"
-#include "mtled/model.hpp"
+#include "mtled/explicit_update.hpp"
+#include "mtled/force_kernel.hpp"
 
 namespace mtled {
 
@@ -18,19 +18,21 @@ constexpr std::int64_t kNodesWorthAThread = 8192;
 
 }  // namespace
 
-void CpuEngine::setup(const Model& model) {
-  model_ = &model;
-  const std::size_t dofs = 3 * static_cast<std::size_t>(model.node_count());
+void CpuEngine::setup(const ForceKernel& kernel) {
+  kernel_ = &kernel;
+  const Discretisation& discretisation = kernel.discretisation();
+  const std::size_t dofs = 3 * static_cast<std::size_t>(discretisation.node_count());
   for (auto* v : {&u_, &u_previous_, &prediction_, &free_, &f_, &f_previous_}) v->assign(dofs, 0.0);
-  first_bad_.assign(static_cast<std::size_t>(model.team().size()), -1);
-  partial_.assign(static_cast<std::size_t>(model.team().size()), Partial{});
+  first_bad_.assign(static_cast<std::size_t>(discretisation.team().size()), -1);
+  partial_.assign(static_cast<std::size_t>(discretisation.team().size()), Partial{});
 }
 
 json CpuEngine::describe() const {
-  json out = {{"type", "cpu"}, {"threads", model_->team().size()}, {"force_evaluations", evaluations_}};
+  json out = {
+      {"type", "cpu"}, {"threads", kernel_->discretisation().team().size()}, {"force_evaluations", evaluations_}};
   if (evaluations_ > 0) {
     const double seconds = kernel_s_ / static_cast<double>(evaluations_);
-    const auto bytes = static_cast<double>(model_->streamed_bytes_per_force_evaluation());
+    const auto bytes = static_cast<double>(kernel_->streamed_bytes_per_force_evaluation());
     out["force_kernel_s"] = seconds;
     out["force_kernel_bytes"] = bytes;
     out["force_kernel_GB_per_s"] = bytes / seconds / 1e9;
@@ -57,15 +59,17 @@ std::int64_t CpuEngine::predict(const UpdateCoefficients& update, std::span<cons
   const ScopeTimer timer(update_s_);
   const double* external = f_ext.empty() ? nullptr : f_ext.data();
   std::fill(first_bad_.begin(), first_bad_.end(), -1);
-  for_each_node_share([&](std::size_t begin, std::size_t end, int part) {
-    explicit_update(u_.data(), u_previous_.data(), external, f_.data(), f_previous_.data(), mass_.data(), update,
-                    prediction_.data(), begin, end);
-    for (std::size_t d = 3 * begin; d < 3 * end; ++d) {
-      free_[d] = prediction_[d];
-      if (!std::isfinite(prediction_[d]) && first_bad_[static_cast<std::size_t>(part)] < 0)
-        first_bad_[static_cast<std::size_t>(part)] = static_cast<std::int64_t>(d);
-    }
-  }, parts_for(model_->node_count()));
+  for_each_node_share(
+      [&](std::size_t begin, std::size_t end, int part) {
+        explicit_update(u_.data(), u_previous_.data(), external, f_.data(), f_previous_.data(), mass_.data(), update,
+                        prediction_.data(), begin, end);
+        for (std::size_t d = 3 * begin; d < 3 * end; ++d) {
+          free_[d] = prediction_[d];
+          if (!std::isfinite(prediction_[d]) && first_bad_[static_cast<std::size_t>(part)] < 0)
+            first_bad_[static_cast<std::size_t>(part)] = static_cast<std::int64_t>(d);
+        }
+      },
+      parts_for(kernel_->discretisation().node_count()));
   for (const std::int64_t bad : first_bad_)
     if (bad >= 0) return bad;  // the shares are in node order: the first share's is the lowest
   return -1;
@@ -80,17 +84,17 @@ void CpuEngine::prediction(std::span<double> out) { std::copy(prediction_.begin(
 
 void CpuEngine::constrained_values(const ConstraintBlock& block, std::vector<double>& out) {
   const ScopeTimer timer(update_s_);
-  mtled::constrained_values(block, prediction_, out, model_->team());
+  mtled::constrained_values(block, prediction_, out, kernel_->discretisation().team());
 }
 
 void CpuEngine::add_correction(const ConstraintBlock& block, const std::vector<double>& y) {
   const ScopeTimer timer(update_s_);
-  mtled::add_correction(block, y, prediction_, model_->team());
+  mtled::add_correction(block, y, prediction_, kernel_->discretisation().team());
 }
 
 StepSums CpuEngine::commit(bool, double beta) {
   const ScopeTimer timer(update_s_);
-  const int parts = parts_for(model_->node_count());
+  const int parts = parts_for(kernel_->discretisation().node_count());
   std::fill(partial_.begin(), partial_.begin() + parts, Partial{});
   for_each_node_share([&](std::size_t begin, std::size_t end, int part) {
     Partial& mine = partial_[static_cast<std::size_t>(part)];
@@ -115,17 +119,16 @@ Index CpuEngine::internal_forces(std::span<const double> u, std::span<double> f)
   return timed([&] { return forces(u, f); });
 }
 
-
-Index CpuEngine::forces(std::span<const double> u, std::span<double> f) { return model_->internal_forces(u, f); }
+Index CpuEngine::forces(std::span<const double> u, std::span<double> f) { return kernel_->internal_forces(u, f); }
 
 int CpuEngine::parts_for(Index nodes) const {
-  const int team = model_->team().size();
+  const int team = kernel_->discretisation().team().size();
   return nodes >= kNodesWorthAThread * team ? team : 1;
 }
 
 template <class Body>
 void CpuEngine::for_each_node_share(Body&& body, int parts) {
-  const Index nodes = model_->node_count();
+  const Index nodes = kernel_->discretisation().node_count();
   const auto share = [&](int part) {
     const auto [begin, end] = ThreadTeam::share(nodes, part, parts);
     body(static_cast<std::size_t>(begin), static_cast<std::size_t>(end), part);
@@ -133,7 +136,7 @@ void CpuEngine::for_each_node_share(Body&& body, int parts) {
   if (parts == 1)
     share(0);
   else
-    model_->team().run(share);
+    kernel_->discretisation().team().run(share);
 }
 
 std::unique_ptr<StepEngine> make_cpu_engine() { return std::make_unique<CpuEngine>(); }

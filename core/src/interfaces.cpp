@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "mtled/explicit_update.hpp"
+#include "mtled/force_kernel.hpp"
 #include "mtled/interfaces/backend.hpp"
 #include "mtled/interfaces/driver.hpp"
 #include "mtled/interfaces/integrator.hpp"
@@ -13,7 +14,6 @@
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/interfaces/shape_functions.hpp"
 #include "mtled/interfaces/volumetric_treatment.hpp"
-#include "mtled/model.hpp"
 #include "mtled/monitor.hpp"
 
 namespace mtled {
@@ -39,21 +39,21 @@ ShapeFunctionFit ShapeFunctions::interpolate(const Vec3& x, std::span<const Vec3
 }
 Material::~Material() = default;
 Driver::~Driver() = default;
-bool Driver::nodes_read(const LoadState&, const ModelView&, std::vector<Index>&) const { return false; }
+bool Driver::nodes_read(const LoadState&, const Discretisation&, std::vector<Index>&) const { return false; }
 BoundaryCondition::~BoundaryCondition() = default;
 NeedleModel::~NeedleModel() = default;
 TimeIntegrator::~TimeIntegrator() = default;
 VolumetricTreatment::~VolumetricTreatment() = default;
-Index VolumetricTreatment::stress_deformation_gradients(const Model& model, std::span<const double> u,
+Index VolumetricTreatment::stress_deformation_gradients(const ForceKernel& kernel, std::span<const double> u,
                                                         std::span<Mat3> F) {
-  return model.deformation_gradients(u, F);
+  return kernel.deformation_gradients(u, F);
 }
-Index VolumetricTreatment::internal_forces(const Model&, std::span<const double>, std::span<double>,
+Index VolumetricTreatment::internal_forces(const ForceKernel&, std::span<const double>, std::span<double>,
                                            std::span<const PointRange>) {
   throw std::logic_error("this volumetric treatment sums only over every integration point");
 }
-std::vector<PointRange> VolumetricTreatment::points_read(const Model& model, std::span<const PointRange>) {
-  const std::span<const PointRange> every = model.every_point();
+std::vector<PointRange> VolumetricTreatment::points_read(const ForceKernel& kernel, std::span<const PointRange>) {
+  const std::span<const PointRange> every = kernel.discretisation().points().every();
   return {every.begin(), every.end()};
 }
 StepMonitor::~StepMonitor() = default;

@@ -99,17 +99,17 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   TetMesh mesh = load_scene_mesh(scene, catalog);
   auto materials = region_materials(scene, catalog, mesh);
   std::vector<int> cell_groups = engine_->cell_groups(mesh);
-  build_model(scene, catalog, std::move(mesh), std::move(materials), std::move(cell_groups));
+  build_discretisation(scene, catalog, std::move(mesh), std::move(materials), std::move(cell_groups));
   build_drivers(scene, catalog);
   if (scene.backend)
-    guarded(scene.backend->parameters, "setting up the backend", [&] { engine_->setup(*model_); });
+    guarded(scene.backend->parameters, "setting up the backend", [&] { engine_->setup(*kernel_); });
   else
-    engine_->setup(*model_);
+    engine_->setup(*kernel_);
   // The state: at rest, the constraints applied.
-  const std::size_t dofs = 3 * static_cast<std::size_t>(model_->node_count());
-  mass_ = model_->lumped_mass();
+  const std::size_t dofs = 3 * static_cast<std::size_t>(discretisation_->node_count());
+  mass_ = discretisation_->lumped_mass();
   engine_->set_mass(mass_);
-  const auto& dt = model_->ip_critical_time_steps();
+  const auto& dt = discretisation_->points().critical_time_steps;
   unscaled_stable_time_step_ = stable_time_step_ = *std::min_element(dt.begin(), dt.end());
   update_drivers();
   std::vector<double> u(dofs, 0.0);
@@ -119,33 +119,34 @@ Simulation::Simulation(const Scene& scene, PluginCatalog& catalog) {
   integrator_ = build<TimeIntegrator>(catalog, scene.integrator);
 }
 
-void Simulation::build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
-                             std::vector<std::shared_ptr<const Material>> materials, std::vector<int> cell_groups) {
+void Simulation::build_discretisation(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
+                                      std::vector<std::shared_ptr<const Material>> materials,
+                                      std::vector<int> cell_groups) {
   auto shape_functions = build<ShapeFunctions>(catalog, scene.shape_function);
-  Model::Options options;
+  Discretisation::Options options;
   options.integration_points_per_tet = static_cast<int>(scene.discretisation.integer("integration_points_per_tet"));
   options.consistent_integration = scene.discretisation.boolean("consistent_integration");
   options.precision = scene.discretisation.string("precision") == "single" ? RowPrecision::single_precision
                                                                            : RowPrecision::double_precision;
-  if (scene.volumetric) options.volumetric = build<VolumetricTreatment>(catalog, *scene.volumetric);
   options.cell_groups = std::move(cell_groups);
-  model_ = std::make_unique<Model>(std::move(mesh), shape_functions, std::move(materials), options);
-  const SupportStatistics stats = model_->ip_support_statistics();
-  log().info("model: {} nodes, {} integration points, support size min/mean/max {}/{:.1f}/{}", model_->node_count(),
-             model_->integration_point_count(), stats.min, stats.mean, stats.max);
-
+  discretisation_ = std::make_unique<Discretisation>(std::move(mesh), shape_functions, std::move(materials), options);
+  kernel_ = std::make_unique<ForceKernel>(
+      *discretisation_, scene.volumetric ? build<VolumetricTreatment>(catalog, *scene.volumetric) : nullptr);
+  const SupportStatistics stats = discretisation_->points().support;
+  log().info("model: {} nodes, {} integration points, support size min/mean/max {}/{:.1f}/{}",
+             discretisation_->node_count(), discretisation_->points().count(), stats.min, stats.mean, stats.max);
 }
 
 void Simulation::build_drivers(const Scene& scene, PluginCatalog& catalog) {
   for (const auto& block : scene.boundaries) {
     auto boundary = build<BoundaryCondition>(catalog, block);
-    guarded(block.parameters, "setting up the boundary condition", [&] { boundary->setup(model_->view()); });
+    guarded(block.parameters, "setting up the boundary condition", [&] { boundary->setup(*discretisation_); });
     boundaries_.push_back(boundary);
     drivers_.push_back(boundary.get());
   }
   if (scene.needle) {
     needle_ = build<NeedleModel>(catalog, *scene.needle);
-    guarded(scene.needle->parameters, "setting up the needle", [&] { needle_->setup(model_->view()); });
+    guarded(scene.needle->parameters, "setting up the needle", [&] { needle_->setup(*discretisation_); });
     drivers_.push_back(needle_.get());
   }
   for (Driver* driver : drivers_) {
@@ -161,14 +162,13 @@ void Simulation::build_drivers(const Scene& scene, PluginCatalog& catalog) {
         throw InputError("/boundaries", fmt::format("two constraint sets are named \"{}\" (reactions.csv could not tell "
                                                     "them apart): give each boundary a distinct \"name\"",
                                                     constraint_sets_[a]->name));
-  constraint_system_ = std::make_unique<ConstraintSystem>(*model_);
-
+  constraint_system_ = std::make_unique<ConstraintSystem>(*discretisation_);
 }
 
 Simulation::~Simulation() = default;
 
 void Simulation::equalise_critical_steps() {
-  const auto& dt = model_->ip_critical_time_steps();
+  const auto& dt = discretisation_->points().critical_time_steps;
   const std::vector<double> scale = scale_masses({});
   double smallest = dt[0] * std::sqrt(scale[0]);
   for (std::size_t i = 0; i < dt.size(); ++i) smallest = std::min(smallest, dt[i] * std::sqrt(scale[i]));
@@ -177,7 +177,7 @@ void Simulation::equalise_critical_steps() {
 
 void Simulation::equalise_current_critical_steps() {
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<double> stiffening = model_->ip_stiffening(displacement());
+  const std::vector<double> stiffening = mtled::stiffening(*discretisation_, displacement());
   scale_masses(stiffening);
   const auto stiffer = std::count_if(stiffening.begin(), stiffening.end(), [](double s) { return s > 1.0; });
   log().debug(
@@ -188,7 +188,7 @@ void Simulation::equalise_current_critical_steps() {
 }
 
 std::vector<double> Simulation::scale_masses(std::span<const double> stiffening) {
-  const auto& dt = model_->ip_critical_time_steps();
+  const auto& dt = discretisation_->points().critical_time_steps;
   const double target = *std::max_element(dt.begin(), dt.end());
   std::vector<double> scale(dt.size());
   for (std::size_t i = 0; i < dt.size(); ++i) {
@@ -197,26 +197,28 @@ std::vector<double> Simulation::scale_masses(std::span<const double> stiffening)
     const double now = stiffening.empty() ? dt[i] : dt[i] / std::sqrt(stiffening[i]);
     scale[i] = now < target ? (target / now) * (target / now) : 1.0;
   }
-  mass_ = model_->lumped_mass(scale);
+  mass_ = discretisation_->lumped_mass(scale);
   engine_->set_mass(mass_);
   mass_changed_ = true;
   return scale;
 }
 
 void Simulation::inadmissible(Index bad, std::span<const double> u) const {
-  const Mat3 F = model_->deformation_gradient(bad, u);
+  const Mat3 F = discretisation_->deformation_gradient(bad, u);
   Diagnostic d;
   d.step = load_.step;
   d.time = load_.time;
   d.what = std::isfinite(F.sum()) ? "inverted_material" : "non_finite";
   d.detail = std::isfinite(F.sum())
-                 ? fmt::format("J = det F = {:.4g} <= 0 at integration point {} (tet {}) at {} m: the material is "
-                               "inverted; reduce the time-step factor or the load rate",
-                               F.determinant(), bad, model_->ip_tets()[bad], point_text(model_->ip_positions()[bad]))
+                 ? fmt::format(
+                       "J = det F = {:.4g} <= 0 at integration point {} (tet {}) at {} m: the material is "
+                       "inverted; reduce the time-step factor or the load rate",
+                       F.determinant(), bad, discretisation_->points().tets[bad],
+                       point_text(discretisation_->points().positions[bad]))
                  : fmt::format("non-finite deformation gradient at integration point {} at {} m", bad,
-                               point_text(model_->ip_positions()[bad]));
+                               point_text(discretisation_->points().positions[bad]));
   d.integration_points = {bad};
-  d.coordinates = {model_->ip_positions()[bad]};
+  d.coordinates = {discretisation_->points().positions[bad]};
   throw InstabilityError(std::move(d));
 }
 
@@ -245,7 +247,7 @@ std::span<const double> Simulation::drivers_reads() {
   if (!engine_->spreads_nodes()) return displacement();
   nodes_read_.clear();
   for (const Driver* driver : drivers_)
-    if (!driver->nodes_read(load_, model_->view(), nodes_read_)) return displacement();
+    if (!driver->nodes_read(load_, *discretisation_, nodes_read_)) return displacement();
   std::sort(nodes_read_.begin(), nodes_read_.end());
   nodes_read_.erase(std::unique(nodes_read_.begin(), nodes_read_.end()), nodes_read_.end());
   return engine_->displacement_at(nodes_read_);
@@ -258,7 +260,7 @@ bool Simulation::monitors_read(long step) const {
 
 void Simulation::update_drivers() {
   const std::span<const double> u = drivers_reads();
-  for (Driver* driver : drivers_) driver->update(load_, model_->view(), u);
+  for (Driver* driver : drivers_) driver->update(load_, *discretisation_, u);
   constraint_system_->update(constraint_sets_, mass_, mass_changed_);
   mass_changed_ = false;
 }
@@ -267,8 +269,8 @@ void Simulation::not_finite(std::int64_t unknown, double value, double new_time)
   const auto node = static_cast<Index>(unknown / 3);
   throw node_instability(load_.step + 1, new_time, "non_finite",
                          fmt::format("displacement component {} of node {} at {} m became {}", "xyz"[unknown % 3], node,
-                                     point_text(model_->nodes()[node]), value),
-                         model_->view(), node);
+                                     point_text(discretisation_->nodes()[node]), value),
+                         *discretisation_, node);
 }
 
 namespace {
@@ -302,12 +304,12 @@ void Simulation::project(double new_time, double new_load_fraction, double alpha
 StepSums Simulation::advance(const UpdateCoefficients& update, double new_time, double new_load_fraction) {
   std::span<const double> f_ext;
   if (has_external_forces()) {
-    f_ext_.resize(3 * static_cast<std::size_t>(model_->node_count()));
+    f_ext_.resize(3 * static_cast<std::size_t>(discretisation_->node_count()));
     external_forces(f_ext_);
     f_ext = f_ext_;
   }
   if (const std::int64_t bad = engine_->predict(update, f_ext); bad >= 0) {
-    std::vector<double> u(3 * static_cast<std::size_t>(model_->node_count()));
+    std::vector<double> u(3 * static_cast<std::size_t>(discretisation_->node_count()));
     engine_->prediction(u);
     not_finite(bad, u[static_cast<std::size_t>(bad)], new_time);
   }
@@ -338,13 +340,15 @@ StepRecord Simulation::last_step() const {
   if (displacement_whole_) r.u = displacement();
   r.mass = mass_;
   r.sums = sums_;
-  r.model = &model_->view();
+  r.discretisation = discretisation_.get();
   r.integrator = integrator_.get();
   r.internal_forces = [engine = engine_.get()](std::span<const double> u, std::span<double> f) {
     return engine->internal_forces(u, f);
   };
   r.project_out = [constraints = constraint_system_.get()](std::span<double> v) { constraints->project_out(v); };
-  r.for_each_share = [team = &model_->team()](std::int64_t n, const auto& body) { team->for_each_share(n, body); };
+  r.for_each_share = [team = &discretisation_->team()](std::int64_t n, const auto& body) {
+    team->for_each_share(n, body);
+  };
   r.constraint_sets = constraint_sets_read_only_;
   r.previous_values = previous_values_;
   r.external_forces = !force_sets_.empty();
@@ -405,7 +409,7 @@ void Simulation::set_stable_time_step(double stable_time_step) {
 std::vector<double> Simulation::interpolated_displacement() const {
   const auto u = displacement();
   std::vector<double> out(u.size());
-  model_->interpolate(u, out);
+  discretisation_->interpolate(u, out);
   return out;
 }
 

@@ -7,9 +7,9 @@
 // arithmetic, and the same refusal of an entry point off the body.
 #include <fmt/format.h>
 
+#include "mtled/discretisation.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
-#include "mtled/model_view.hpp"
 #include "mtled/needle/needle_geometry.hpp"
 #include "mtled/plugin.hpp"
 
@@ -30,7 +30,7 @@ class FlatPunchNeedle final : public NeedleModel {
     bonded_.name = "needle";
   }
 
-  void setup(const ModelView& model) override {
+  void setup(const Discretisation& model) override {
     place_needle_path(path_, model, parameters_);  // an entry off the body is refused, at its pointer
     // The end's footprint: surface nodes within half a node spacing of the entry plane and the radius of
     // the axis.
@@ -38,7 +38,7 @@ class FlatPunchNeedle final : public NeedleModel {
     std::vector<Index> footprint;
     for (Index i = 0; i < model.node_count(); ++i) {
       const Vec3& x = model.nodes()[i];
-      if (model.surface()[i] && std::abs(path_.axial(x)) <= 0.5 * spacing && path_.radial(x) <= path_.radius)
+      if (model.cloud().surface[i] && std::abs(path_.axial(x)) <= 0.5 * spacing && path_.radial(x) <= path_.radius)
         footprint.push_back(i);
     }
     if (footprint.size() < 3)
@@ -50,7 +50,7 @@ class FlatPunchNeedle final : public NeedleModel {
     bonded_.assign_nodes(std::move(footprint), Vec3::Zero());  // all three components: a bonded end
   }
 
-  void update(const LoadState& load, const ModelView&, std::span<const double>) override {
+  void update(const LoadState& load, const Discretisation&, std::span<const double>) override {
     depth_ = load.load_fraction * path_.depth;
     for (auto& value : bonded_.values) value = depth_ * path_.direction;
   }

@@ -41,7 +41,9 @@ const std::vector<DerivedField>& derived_fields() {
   return fields;
 }
 
-std::vector<CellField> cell_fields(const ModelView& model, std::span<const double> u, const std::vector<std::string>& names) {
+std::vector<CellField> cell_fields(const ForceKernel& kernel, std::span<const double> u,
+                                   const std::vector<std::string>& names) {
+  const Discretisation& model = kernel.discretisation();
   std::vector<CellField> out;
   const auto tets = static_cast<std::size_t>(model.mesh().tet_count());
   std::vector<Mat3> stress_gradients;  // computed for the first stress field named
@@ -53,12 +55,15 @@ std::vector<CellField> cell_fields(const ModelView& model, std::span<const doubl
     CellField cells{name, field->components, std::vector<double>(tets * components, 0.0)};
     std::vector<int> count(tets, 0);
     std::vector<double> value(components);
-    if (field->stress && stress_gradients.empty()) stress_gradients = model.stress_deformation_gradients(u);
-    for (Index ip = 0; ip < model.integration_point_count(); ++ip) {
+    if (field->stress && stress_gradients.empty()) {
+      stress_gradients.resize(static_cast<std::size_t>(model.points().count()));
+      if (kernel.stress_deformation_gradients(u, stress_gradients) >= 0) stress_gradients.clear();
+    }
+    for (Index ip = 0; ip < model.points().count(); ++ip) {
       const bool own = !field->stress || stress_gradients.empty();  // empty: an inadmissible state, as written
       field->compute(own ? model.deformation_gradient(ip, u) : stress_gradients[static_cast<std::size_t>(ip)],
-                     model.ip_material(ip), value.data());
-      const auto t = static_cast<std::size_t>(model.ip_tets()[ip]);
+                     model.material(ip), value.data());
+      const auto t = static_cast<std::size_t>(model.points().tets[ip]);
       ++count[t];
       for (std::size_t c = 0; c < components; ++c) cells.values[components * t + c] += value[c];
     }

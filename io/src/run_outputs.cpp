@@ -153,8 +153,9 @@ void HistoryWriter::record_equilibrium(const StepRecord& step) {
 
 // ---- snapshots
 
-SnapshotWriter::SnapshotWriter(const OutputFolder& folder, const Parameters& output)
+SnapshotWriter::SnapshotWriter(const OutputFolder& folder, const Parameters& output, const ForceKernel& kernel)
     : folder_(folder),
+      kernel_(kernel),
       every_(output.integer("every_steps")),
       style_(vtu_style(output)),
       cell_data_(output.string_list("cell_data")) {}
@@ -179,9 +180,9 @@ void SnapshotWriter::complete(const StepRecord& last) {
 void SnapshotWriter::snapshot(const StepRecord& step) {
   const std::string file = fmt::format("steps/{:06d}.vtu", step.step);
   std::vector<double> u(step.u.size());
-  step.model->interpolate(step.u, u);
-  const std::vector<CellField> fields = cell_fields(*step.model, step.u, cell_data_);
-  folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, step.model->mesh(), u, fields, style_); });
+  step.discretisation->interpolate(step.u, u);
+  const std::vector<CellField> fields = cell_fields(kernel_, step.u, cell_data_);
+  folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, step.discretisation->mesh(), u, fields, style_); });
   snapshots_.emplace_back(step.time, file);
   last_snapshot_ = step.step;
 }
@@ -191,19 +192,21 @@ std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulat
   const Parameters& output = scene.section("output");
   std::vector<std::shared_ptr<OutputWriter>> writers;
   writers.push_back(std::make_shared<HistoryWriter>(folder, output));  // opens only the files the run has rows for
-  if (output.integer("every_steps") > 0) writers.push_back(std::make_shared<SnapshotWriter>(folder, output));
+  if (output.integer("every_steps") > 0)
+    writers.push_back(std::make_shared<SnapshotWriter>(folder, output, simulation.force_kernel()));
   for (const auto& writer : writers) simulation.add_monitor(writer);
   return writers;
 }
 
 // ---- the final state and the summary
 
-std::vector<double> write_state(const OutputFolder& folder, const std::string& file, const ModelView& model,
+std::vector<double> write_state(const OutputFolder& folder, const std::string& file, const ForceKernel& kernel,
                                 std::span<const double> u, const Parameters& output, bool with_cell_data,
                                 const std::vector<CellField>& extra_fields) {
+  const Discretisation& model = kernel.discretisation();
   std::vector<double> interpolated(u.size());
   model.interpolate(u, interpolated);
-  auto fields = with_cell_data ? cell_fields(model, u, output.string_list("cell_data")) : std::vector<CellField>{};
+  auto fields = with_cell_data ? cell_fields(kernel, u, output.string_list("cell_data")) : std::vector<CellField>{};
   fields.insert(fields.end(), extra_fields.begin(), extra_fields.end());
   folder.write_file(file, [&](std::ostream& out) { write_vtu(out, model.mesh(), interpolated, fields, vtu_style(output)); });
   return interpolated;
@@ -233,10 +236,10 @@ void RunSummary::record_resources(const PluginCatalog& catalog, double setup_tim
 }
 
 void RunSummary::record_simulation(const Simulation& simulation, double solve_time) {
-  const Model& model = simulation.model();
-  const auto stats = model.ip_support_statistics();
+  const Discretisation& model = simulation.discretisation();
+  const auto stats = model.points().support;
   summary_["nodes"] = model.node_count();
-  summary_["integration_points"] = model.integration_point_count();
+  summary_["integration_points"] = model.points().count();
   summary_["support_size"] = {{"min", stats.min}, {"mean", stats.mean}, {"max", stats.max}};
   summary_["min_reciprocal_condition"] = stats.min_reciprocal_condition;
   json mesh(model.mesh().statistics);
@@ -252,9 +255,8 @@ void RunSummary::record_simulation(const Simulation& simulation, double solve_ti
   summary_["constraint_factorisations"] = simulation.constraints().factorisations();
   summary_["force_evaluations"] = simulation.force_evaluations();
   summary_["monitors"] = simulation.monitor_reports();
-  summary_["ip_updates_per_s"] = solve_time > 0 ? static_cast<double>(simulation.force_evaluations()) *
-                                                      model.integration_point_count() / solve_time
-                                                : 0.0;
+  summary_["ip_updates_per_s"] =
+      solve_time > 0 ? static_cast<double>(simulation.force_evaluations()) * model.points().count() / solve_time : 0.0;
   const IntegratorReport report = simulation.integrator().report();
   summary_["integrator"] = to_json(report);
   if (report.relaxation) summary_["integrator"]["relaxed_states"] = simulation.steady_states();

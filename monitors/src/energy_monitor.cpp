@@ -33,7 +33,7 @@ void EnergyMonitor::after_step(const StepRecord& step) {
   // time-step factors.) For a mode that grows, it grows too (in magnitude). The step engine sums both where the
   // state lives.
   if (!(step.step_size > 0.0)) return;
-  const ModelView& model = *step.model;
+  const Discretisation& model = *step.discretisation;
   const double added = step.sums.projection_energy;
   const Index fastest = step.sums.fastest_node;
   work_bound_ += 0.5 * added / (step.step_size * step.step_size);

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 
+#include "mtled/discretisation.hpp"
 #include "mtled/instability.hpp"
 #include "mtled/log.hpp"
-#include "mtled/model_view.hpp"
 
 namespace mtled {
 
@@ -47,12 +47,12 @@ namespace {
 // cannot cut the tissue; the nodes whose supports reach the shaft are dragged along with it, so the tets around the
 // path fold (on the brain phantom's 3 mm cloud, tets up to 3 mm from the 0.8 mm needle's axis). Those are cuts; a fold
 // outside the zone is the material folding.
-bool in_needle_zone(const ModelView& model, Index t, const NeedleStatus& needle) {
+bool in_needle_zone(const Discretisation& model, Index t, const NeedleStatus& needle) {
   const TetMesh& mesh = model.mesh();
   for (const Index v : mesh.tets[t]) {
     const Vec3& x = mesh.points[v];
     const double along = std::clamp(needle.direction.dot(x - needle.entry), 0.0, needle.depth);
-    if ((x - (needle.entry + along * needle.direction)).norm() <= needle.radius + model.support_radius()[v])
+    if ((x - (needle.entry + along * needle.direction)).norm() <= needle.radius + model.cloud().support_radius[v])
       return true;
   }
   return false;
@@ -65,7 +65,7 @@ constexpr double kSliverRadiusRatio = 0.1;
 }  // namespace
 
 void InversionMonitor::check(const StepRecord& step) {
-  const ModelView& model = *step.model;
+  const Discretisation& model = *step.discretisation;
   if (sliver_.empty()) {
     sliver_.resize(static_cast<std::size_t>(model.mesh().tet_count()));
     for (Index t = 0; t < model.mesh().tet_count(); ++t)
@@ -162,7 +162,7 @@ std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, dou
 }
 
 void InversionMonitor::stop(const StepRecord& step, Index worst, double smallest, Index node, Vec3 moved_by) const {
-  const ModelView& model = *step.model;
+  const Discretisation& model = *step.discretisation;
   const TetMesh& mesh = model.mesh();
   const NeedleStatus* needle = step.needle && step.needle->depth > 0.0 ? &*step.needle : nullptr;
   if (folded_) {  // last_good_state.vtu's "folded": the tets this check found turned over

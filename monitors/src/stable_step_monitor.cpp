@@ -4,9 +4,9 @@
 #include <algorithm>
 #include <iterator>
 
+#include "mtled/discretisation.hpp"
 #include "mtled/instability.hpp"
 #include "mtled/log.hpp"
-#include "mtled/model_view.hpp"
 #include "mtled/monitors/reorthogonalise.hpp"
 
 namespace mtled {
@@ -41,14 +41,15 @@ void StableStepMonitor::declare(ComponentDeclaration& d) {
            "estimate starts from the previous one's Ritz vector; the first, from a random one, uses three times as many");
 }
 
-std::unique_ptr<StableStepMonitor> StableStepMonitor::from_section(const Parameters& monitors, const ModelView& model) {
+std::unique_ptr<StableStepMonitor> StableStepMonitor::from_section(const Parameters& monitors,
+                                                                   const Discretisation& model) {
   const long every = monitors.integer("stable_step_every_steps");
   if (every == 0) return nullptr;
   // 1e-7 of the body's size: far inside the linear range of any element, far above round-off in the forces.
   const std::string response = monitors.string("stable_step");  // one of the choices (validated)
   const auto named = std::find(std::begin(kResponseNames), std::end(kResponseNames), response);
   return std::make_unique<StableStepMonitor>(every, static_cast<int>(monitors.integer("stable_step_iterations")),
-                                             1e-7 * model.length_scale(),
+                                             1e-7 * model.cloud().length_scale,
                                              static_cast<Response>(named - std::begin(kResponseNames)));
 }
 
@@ -188,7 +189,7 @@ void StableStepMonitor::follow_loads(const StepRecord& step) {
 }
 
 void StableStepMonitor::refuse(const StepRecord& step) const {
-  const ModelView& model = *step.model;
+  const Discretisation& model = *step.discretisation;
   const double step_size = step.step_size;
   // Where the fastest mode lives: the node with the largest share of it.
   Index where = 0;

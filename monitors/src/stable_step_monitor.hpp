@@ -20,7 +20,7 @@ class StableStepMonitor final : public StepMonitor {
   // Its parameters in the scene's "monitors" section.
   static void declare(ComponentDeclaration& d);
   // The monitor the section asks for; null when stable_step_every_steps is 0.
-  static std::unique_ptr<StableStepMonitor> from_section(const Parameters& monitors, const ModelView& model);
+  static std::unique_ptr<StableStepMonitor> from_section(const Parameters& monitors, const Discretisation& model);
   // `perturbation_length`: the largest nodal perturbation of the force differences (m).
   enum class Response { stop, adapt, follow };
   StableStepMonitor(long every, int iterations, double perturbation_length, Response response)

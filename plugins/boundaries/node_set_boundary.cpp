@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
+#include "mtled/discretisation.hpp"
 #include "mtled/log.hpp"
-#include "mtled/model_view.hpp"
 
 namespace mtled {
 
@@ -37,8 +37,8 @@ NodeSetBoundary::NodeSetBoundary(const Parameters& parameters, Vec3 final_displa
   }
 }
 
-void NodeSetBoundary::setup(const ModelView& model) {
-  std::vector<Index> nodes = select_nodes(selector_, model.mesh(), model.surface(), parameters_.pointer("nodes"));
+void NodeSetBoundary::setup(const Discretisation& model) {
+  std::vector<Index> nodes = select_nodes(selector_, model.mesh(), model.cloud().surface, parameters_.pointer("nodes"));
   if (nodes.empty())
     throw InputError(parameters_.pointer("nodes"),
                      fmt::format("selects no node of the mesh ({}): check the coordinates (in m) and the tolerance",
@@ -48,7 +48,7 @@ void NodeSetBoundary::setup(const ModelView& model) {
   log().info("boundary \"{}\": {} nodes ({})", set_.name, set_.size(), selector_.describe());
 }
 
-void NodeSetBoundary::update(const LoadState& load, const ModelView&, std::span<const double>) {
+void NodeSetBoundary::update(const LoadState& load, const Discretisation&, std::span<const double>) {
   for (std::size_t k = 0; k < set_.values.size(); ++k)
     set_.values[k] = load.load_fraction * (final_displacement_ + final_gradient_ * positions_[k]);
 }

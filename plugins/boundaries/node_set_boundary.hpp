@@ -12,9 +12,9 @@ class NodeSetBoundary : public BoundaryCondition {
   static void declare_selection(ComponentDeclaration& d);
   NodeSetBoundary(const Parameters& parameters, Vec3 final_displacement, Mat3 final_gradient = Mat3::Zero());
 
-  void setup(const ModelView& model) override;
-  void update(const LoadState& load, const ModelView& model, std::span<const double> u) override;
-  bool nodes_read(const LoadState&, const ModelView&, std::vector<Index>&) const override { return true; }  // none
+  void setup(const Discretisation& model) override;
+  void update(const LoadState& load, const Discretisation& model, std::span<const double> u) override;
+  bool nodes_read(const LoadState&, const Discretisation&, std::vector<Index>&) const override { return true; }  // none
   std::vector<NodalConstraints*> constraints() override { return {&set_}; }
 
  private:

@@ -133,7 +133,7 @@ class KinematicNeedle final : public NeedleModel {
                        "set \"drive\" to \"from_reference\" (the default), or leave settle_steps out");
   }
 
-  void setup(const ModelView& model) override {
+  void setup(const Discretisation& model) override {
     place_needle_path(path_, model, parameters_);
     const double spacing = spacing_at_entry(path_, model);
     capture_radius_ = capture_radius_option_.value_or(std::max(path_.radius, 0.6 * spacing));
@@ -173,7 +173,7 @@ class KinematicNeedle final : public NeedleModel {
                  footprint_.size(), candidates_.size(), 1e3 * capture_radius_, coefficient_);
   }
 
-  void update(const LoadState& load, const ModelView& model, std::span<const double> u) override {
+  void update(const LoadState& load, const Discretisation& model, std::span<const double> u) override {
     const double advance = load.load_fraction * path_.depth;
     step_ = load.step;
     if (punctured_) {
@@ -192,13 +192,13 @@ class KinematicNeedle final : public NeedleModel {
   // What update() reads: before the puncture the supports of the points around the tip; the supports of the
   // candidates the capture looks at (up to the first the tip has not reached; every remaining one under
   // since_capture, where reaching depends on their displacement).
-  bool nodes_read(const LoadState& load, const ModelView& model, std::vector<Index>& nodes) const override {
+  bool nodes_read(const LoadState& load, const Discretisation& model, std::vector<Index>& nodes) const override {
     const double advance = load.load_fraction * path_.depth;
     if (!punctured_) tip_strain_.append_nodes_read(model, path_.tip(advance), nodes);
     for (std::size_t k = next_candidate_; k < candidates_.size(); ++k) {
       const Index n = candidates_[k];
       if (captured_[n]) continue;
-      model.append_node_support(n, nodes);
+      model.interpolation().append_row(n, nodes);
       if (from_reference_ && advance < path_.axial(model.nodes()[n])) break;
     }
     for (std::size_t k = next_point_; k < shaft_candidates_.size(); ++k) {
@@ -267,7 +267,7 @@ class KinematicNeedle final : public NeedleModel {
   // Rings of points on the shaft's surface, one per `spacing` along the path from the entry to the final depth,
   // each with about one point per spacing around (at least 3), alternate rings turned by half a step. Points
   // outside every support (off the body) are left out.
-  void place_shaft_points(const ModelView& model, double spacing) {
+  void place_shaft_points(const Discretisation& model, double spacing) {
     const Vec3 e1 = path_.direction.unitOrthogonal();
     const Vec3 e2 = path_.direction.cross(e1);
     const int around = std::max(3, static_cast<int>(std::lround(2.0 * std::numbers::pi * path_.radius / spacing)));
@@ -314,7 +314,7 @@ class KinematicNeedle final : public NeedleModel {
   // Captures what the tip has passed. At the first call (puncture) the footprint restarts: from then on it
   // moves with C_D like every captured entry; with shaft_surface the ring at the entry replaces it (the
   // footprint, a few nodes on one side of the axis, would pull the surface off-centre for the whole insertion).
-  void capture_passed(const ModelView& model, std::span<const double> u, double advance) {
+  void capture_passed(const Discretisation& model, std::span<const double> u, double advance) {
     if (!restarted_footprint_) {
       for (std::size_t k = 0; k < nodes_.constraints.size(); ++k) {
         nodes_.captured_at[k] = nodes_.constraints.values[k];

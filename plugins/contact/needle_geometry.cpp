@@ -82,8 +82,8 @@ NeedlePath read_needle_path(const Parameters& p) {
   return path;
 }
 
-std::vector<Index> footprint_nodes(const NeedlePath& path, const ModelView& model, double spacing, double radius) {
-  const auto& surface = model.surface();
+std::vector<Index> footprint_nodes(const NeedlePath& path, const Discretisation& model, double spacing, double radius) {
+  const auto& surface = model.cloud().surface;
   Index nearest = -1;
   double nearest_distance = INFINITY;
   std::vector<Index> footprint;
@@ -101,15 +101,15 @@ std::vector<Index> footprint_nodes(const NeedlePath& path, const ModelView& mode
   return footprint;
 }
 
-double spacing_at_entry(const NeedlePath& path, const ModelView& model) {
+double spacing_at_entry(const NeedlePath& path, const Discretisation& model) {
   std::vector<Index> nearest;
-  model.node_search().nearest(path.entry, 8, nearest);
+  model.cloud().search->nearest(path.entry, 8, nearest);
   double sum = 0.0;
-  for (Index i : nearest) sum += model.node_spacing()[i];
+  for (Index i : nearest) sum += model.cloud().spacing[i];
   return nearest.empty() ? 0.0 : sum / static_cast<double>(nearest.size());
 }
 
-void place_needle_path(NeedlePath& path, const ModelView& model, const Parameters& p) {
+void place_needle_path(NeedlePath& path, const Discretisation& model, const Parameters& p) {
   const std::string& mesh_frame = model.mesh().coordinate_system;
   if (!path.frame.empty() && !mesh_frame.empty() && path.frame != mesh_frame) {
     path.entry = flip_lps_ras(path.entry);
@@ -124,9 +124,9 @@ void place_needle_path(NeedlePath& path, const ModelView& model, const Parameter
                p.file("trajectory").filename().string(), path.entry[0], path.entry[1], path.entry[2],
                path.direction[0] + 0.0, path.direction[1] + 0.0, path.direction[2] + 0.0, 1e3 * path.depth,  // no "-0"
                frame_said);
-  const auto& surface = model.surface();
+  const auto& surface = model.cloud().surface;
   std::vector<Index> nearest;
-  model.node_search().nearest(path.entry, 64, nearest);
+  model.cloud().search->nearest(path.entry, 64, nearest);
   double distance = INFINITY;
   Index closest = -1;
   for (Index i : nearest) {
@@ -163,22 +163,22 @@ void place_needle_path(NeedlePath& path, const ModelView& model, const Parameter
                                  path.direction[0], path.direction[1], path.direction[2], 1e3 * path.depth));
 }
 
-void TipStrainWatch::setup(const NeedlePath& path, const ModelView& model, double radius) {
+void TipStrainWatch::setup(const NeedlePath& path, const Discretisation& model, double radius) {
   radius_ = radius;
   watched_.clear();
-  for (Index ip = 0; ip < model.integration_point_count(); ++ip)
-    if ((model.ip_positions()[ip] - path.entry).norm() <= radius + path.depth) watched_.push_back(ip);
+  for (Index ip = 0; ip < model.points().count(); ++ip)
+    if ((model.points().positions[ip] - path.entry).norm() <= radius + path.depth) watched_.push_back(ip);
 }
 
-void TipStrainWatch::append_nodes_read(const ModelView& model, const Vec3& tip, std::vector<Index>& nodes) const {
+void TipStrainWatch::append_nodes_read(const Discretisation& model, const Vec3& tip, std::vector<Index>& nodes) const {
   for (Index ip : watched_)
-    if ((model.ip_positions()[ip] - tip).norm() <= radius_) model.append_point_support(ip, nodes);
+    if ((model.points().positions[ip] - tip).norm() <= radius_) model.gradients().append_nodes(ip, nodes);
 }
 
-double TipStrainWatch::largest(const ModelView& model, std::span<const double> u, const Vec3& tip) const {
+double TipStrainWatch::largest(const Discretisation& model, std::span<const double> u, const Vec3& tip) const {
   double largest = 0.0;
   for (Index ip : watched_) {
-    if ((model.ip_positions()[ip] - tip).norm() > radius_) continue;
+    if ((model.points().positions[ip] - tip).norm() > radius_) continue;
     const Mat3 F = model.deformation_gradient(ip, u);
     const Mat3 E = 0.5 * (F.transpose() * F - Mat3::Identity());
     const Eigen::SelfAdjointEigenSolver<Mat3> eigen(E, Eigen::EigenvaluesOnly);

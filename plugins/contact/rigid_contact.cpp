@@ -42,6 +42,25 @@
 #include "mtled/needle/needle_geometry.hpp"
 
 namespace mtled {
+namespace {
+
+// Each node's explicit-dynamics stiffness m_I / dt_I^2 (N/m): the sum over the integration points it supports of
+// rho w / (n dt^2), with n the point's support size and dt its critical step. It does not depend on mass scaling
+// (a scaled point's rho w / dt^2 is unchanged).
+std::vector<double> explicit_node_stiffness(const Discretisation& discretisation) {
+  std::vector<double> stiffness(static_cast<std::size_t>(discretisation.node_count()), 0.0);
+  const GradientRows& rows = discretisation.gradients();
+  const IntegrationPoints& points = discretisation.points();
+  for (Index ip = 0; ip < points.count(); ++ip) {
+    const double dt = points.critical_time_steps[ip];
+    const double share =
+        discretisation.material(ip).density() * points.weights[ip] / (static_cast<double>(rows.size(ip)) * dt * dt);
+    for (int k = 0; k < rows.size(ip); ++k) stiffness[rows.node(ip, k)] += share;
+  }
+  return stiffness;
+}
+
+}  // namespace
 
 class RigidContactNeedle final : public NeedleModel {
  public:
@@ -143,7 +162,7 @@ class RigidContactNeedle final : public NeedleModel {
     contact_.name = "needle";
   }
 
-  void setup(const ModelView& model) override {
+  void setup(const Discretisation& model) override {
     place_needle_path(path_, model, parameters_);
     // A basis normal to the axis for azimuths of nodes that lie on it.
     const Vec3 helper = std::abs(path_.direction.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
@@ -160,9 +179,9 @@ class RigidContactNeedle final : public NeedleModel {
           "({:.3g} mm): the shaft never enters the tissue, only the tip acts",
           1e3 * cone, std::atan(tan_tip_) * 180.0 / std::numbers::pi, 1e3 * path_.depth);
 
-    // Explicit-dynamics stiffness of each node, m_I / dt_I^2 (ModelView::explicit_node_stiffness): what the
-    // constraint correction charges per unit of prescribed motion in one step.
-    node_stiffness_ = model.explicit_node_stiffness();
+    // Explicit-dynamics stiffness of each node, m_I / dt_I^2 (explicit_node_stiffness): what the constraint
+    // correction charges per unit of prescribed motion in one step.
+    node_stiffness_ = explicit_node_stiffness(model);
     node_mass_ = model.lumped_mass();
 
     const std::vector<Index> footprint = footprint_nodes(path_, model, spacing_, footprint_radius_);
@@ -190,7 +209,7 @@ class RigidContactNeedle final : public NeedleModel {
         1e3 * cone, mu_);
   }
 
-  void update(const LoadState& load, const ModelView& model, std::span<const double> u) override {
+  void update(const LoadState& load, const Discretisation& model, std::span<const double> u) override {
     const double advance = load.load_fraction * path_.depth;
     const double step_advance = advance - depth_;
     // The integrators' step (time / steps); the gains depend on it where masses are not scaled.
@@ -240,10 +259,10 @@ class RigidContactNeedle final : public NeedleModel {
 
   // What update() reads: the supports of the candidates not in contact (catch_nodes_inside) and, before a puncture
   // by strain, of the points around the tip.
-  bool nodes_read(const LoadState&, const ModelView& model, std::vector<Index>& nodes) const override {
+  bool nodes_read(const LoadState&, const Discretisation& model, std::vector<Index>& nodes) const override {
     if (!punctured_ && !puncture_force_) tip_strain_.append_nodes_read(model, path_.tip(depth_), nodes);
     for (const Index n : candidates_)
-      if (!in_contact_[n]) model.append_node_support(n, nodes);
+      if (!in_contact_[n]) model.interpolation().append_row(n, nodes);
     return true;
   }
 
@@ -384,7 +403,7 @@ class RigidContactNeedle final : public NeedleModel {
     contact_.keep_entries(keep);
   }
 
-  bool punctures(const ModelView& model, std::span<const double> u) {
+  bool punctures(const Discretisation& model, std::span<const double> u) {
     if (puncture_force_) {
       // The reactions oscillate from step to step (the explicit pseudo-dynamics; the first step starts the
       // footprint from rest): compare an exponential average over about ten steps.
@@ -396,7 +415,7 @@ class RigidContactNeedle final : public NeedleModel {
 
   // Catches the candidate nodes the tip has passed that lie inside the needle's volume, or (after puncture)
   // within the capture radius of the axis unless they were released from the contact before.
-  void catch_nodes_inside(const ModelView& model, std::span<const double> u) {
+  void catch_nodes_inside(const Discretisation& model, std::span<const double> u) {
     for (Index n : candidates_) {
       if (in_contact_[n]) continue;
       const Vec3 x = model.nodes()[n] + model.interpolate_node(n, u);
@@ -413,9 +432,9 @@ class RigidContactNeedle final : public NeedleModel {
   // diagonal of the constraint correction, sum_I N_I(X_K)^2 / k_I, with k_I the larger of the node's
   // explicit-dynamics stiffness (mass-scaling invariant) and m_I / h^2 for the step h in use (which is larger
   // where no mass scaling lifts the small steps: central differences).
-  double compliance(const ModelView& model, Index node) const {
+  double compliance(const Discretisation& model, Index node) const {
     double sum = 0.0;
-    const auto& rows = model.node_interpolation();
+    const auto& rows = model.interpolation();
     for (std::int64_t k = rows.offsets[node]; k < rows.offsets[node + 1]; ++k) {
       const auto i = static_cast<std::size_t>(rows.nodes[k]);
       const double stiffness = std::max(node_stiffness_[i], step_ > 0.0 ? node_mass_[i] / (step_ * step_) : 0.0);
@@ -424,7 +443,7 @@ class RigidContactNeedle final : public NeedleModel {
     return sum;
   }
 
-  void catch_node(const ModelView& model, Index node, const Vec3& x, double xi, bool pinned) {
+  void catch_node(const Discretisation& model, Index node, const Vec3& x, double xi, bool pinned) {
     Contact c;
     c.node = node;
     const Vec3 offset = (x - path_.entry) - path_.direction * path_.axial(x);
@@ -447,7 +466,7 @@ class RigidContactNeedle final : public NeedleModel {
     ++caught_;
   }
 
-  void set_values(const ModelView& model) {
+  void set_values(const Discretisation& model) {
     for (std::size_t k = 0; k < contacts_.size(); ++k) {
       const Contact& c = contacts_[k];
       const Vec3 x = path_.entry + (depth_ - c.xi) * path_.direction + c.rho * c.azimuth;

@@ -11,7 +11,7 @@
 #include <limits>
 #include <vector>
 
-#include "mtled/model.hpp"
+#include "mtled/force_kernel.hpp"
 #include "mtled/plugin.hpp"
 
 namespace mtled {
@@ -25,12 +25,13 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   }
   explicit NodalAverageTreatment(const Parameters&) {}
 
-  void setup(const Model& model) override {
+  void setup(const ForceKernel& kernel) override {
+    const Discretisation& model = kernel.discretisation();
     const auto nodes = static_cast<std::size_t>(model.node_count());
-    const auto points = static_cast<std::size_t>(model.integration_point_count());
+    const auto points = static_cast<std::size_t>(model.points().count());
     const auto& tets = model.mesh().tets;
-    const auto& ip_tet = model.ip_tets();
-    const auto& weight = model.ip_weights();
+    const auto& ip_tet = model.points().tets;
+    const auto& weight = model.points().weights;
     // In point order, so every node sums its points in the same order whatever the thread count.
     node_points_ = transpose_rows(static_cast<Index>(points), static_cast<Index>(nodes), [&](Index ip, auto&& add) {
       for (Index v : tets[ip_tet[ip]]) add(v);
@@ -56,20 +57,21 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   // J_bar: dW/dJ_bar = (P_bar : F_bar) / (3 J_bar) =: pi_q / w_q, and dJ_bar_q / dF_p = sum over the vertices I
   // shared by q's and p's tets of (1/4) w_p / W_I times J_p F_p^-T. Summed over q: point p carries the extra
   // stress w_p (sum over its tet's vertices I of Pi_I) J_p F_p^-T with Pi_I = (1/4) sum_q pi_q / W_I.
-  Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f) override {
-    return internal_forces(model, u, f, model.every_point());
+  Index internal_forces(const ForceKernel& kernel, std::span<const double> u, std::span<double> f) override {
+    return internal_forces(kernel, u, f, kernel.discretisation().points().every());
   }
 
   bool sums_over_ranges() const override { return true; }
-  std::vector<PointRange> points_read(const Model& model, std::span<const PointRange> ranges) override {
-    return region_of(model, ranges).far;
+  std::vector<PointRange> points_read(const ForceKernel& kernel, std::span<const PointRange> ranges) override {
+    return region_of(kernel.discretisation(), ranges).far;
   }
 
-  Index internal_forces(const Model& model, std::span<const double> u, std::span<double> f,
+  Index internal_forces(const ForceKernel& kernel, std::span<const double> u, std::span<double> f,
                         std::span<const PointRange> ranges) override {
+    const Discretisation& model = kernel.discretisation();
     const Region& region = region_of(model, ranges);
-    if (const Index bad = averaged_dilatation(model, u, region); bad >= 0) return bad;
-    const auto& weight = model.ip_weights();
+    if (const Index bad = averaged_dilatation(kernel, u, region); bad >= 0) return bad;
+    const auto& weight = model.points().weights;
     const int threads = model.team().size();
     model.team().run([&](int thread) {
       Index& thread_bad = first_bad_[static_cast<std::size_t>(thread)];
@@ -80,7 +82,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
       average_at_nodes(model, pressure_, /*weighted=*/false, region.own_vertices, thread);
       model.team().barrier();
       const auto& tets = model.mesh().tets;
-      const auto& ip_tet = model.ip_tets();
+      const auto& ip_tet = model.points().tets;
       ThreadTeam::for_each_piece_of_share(region.own, thread, threads, [&](Index begin, Index end) {
         for (Index ip = begin; ip < end; ++ip) {
           const auto& tet = tets[ip_tet[ip]];
@@ -91,22 +93,25 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     });
     const Index bad = *std::min_element(first_bad_.begin(), first_bad_.end());
     if (bad != kNone) return bad;
-    model.scatter_stresses(stress_, f, region.own);
+    kernel.scatter_stresses(stress_, f, region.own);
     return -1;
   }
 
-  Index stress_deformation_gradients(const Model& model, std::span<const double> u, std::span<Mat3> F) override {
-    if (const Index bad = averaged_dilatation(model, u, region_of(model, model.every_point())); bad >= 0) return bad;
+  Index stress_deformation_gradients(const ForceKernel& kernel, std::span<const double> u, std::span<Mat3> F) override {
+    const Discretisation& model = kernel.discretisation();
+    if (const Index bad = averaged_dilatation(kernel, u, region_of(model, model.points().every())); bad >= 0)
+      return bad;
     for (std::size_t ip = 0; ip < F.size(); ++ip) F[ip] = std::cbrt(J_bar_[ip] / J_[ip]) * F_[ip];
     return -1;
   }
 
-  double strain_energy(const Model& model, std::span<const double> u) override {
-    if (averaged_dilatation(model, u, region_of(model, model.every_point())) >= 0)
+  double strain_energy(const ForceKernel& kernel, std::span<const double> u) override {
+    const Discretisation& model = kernel.discretisation();
+    if (averaged_dilatation(kernel, u, region_of(model, model.points().every())) >= 0)
       return std::numeric_limits<double>::quiet_NaN();
     double energy = 0.0;
-    for (Index ip = 0; ip < model.integration_point_count(); ++ip)
-      energy += model.ip_weights()[ip] * model.ip_material(ip).energy(std::cbrt(J_bar_[ip] / J_[ip]) * F_[ip]);
+    for (Index ip = 0; ip < model.points().count(); ++ip)
+      energy += model.points().weights[ip] * model.material(ip).energy(std::cbrt(J_bar_[ip] / J_[ip]) * F_[ip]);
     return energy;
   }
 
@@ -123,13 +128,13 @@ class NodalAverageTreatment final : public VolumetricTreatment {
     std::vector<Index> own_vertices, near_vertices;
   };
 
-  const Region& region_of(const Model& model, std::span<const PointRange> ranges) {
+  const Region& region_of(const Discretisation& model, std::span<const PointRange> ranges) {
     for (const auto& [key, region] : regions_)
       if (std::equal(key.begin(), key.end(), ranges.begin(), ranges.end())) return region;
     if (regions_.size() >= 4) regions_.clear();  // an engine uses one or two lists of ranges, fixed for the run
     const auto& tets = model.mesh().tets;
-    const auto& ip_tet = model.ip_tets();
-    const auto points = static_cast<std::size_t>(model.integration_point_count());
+    const auto& ip_tet = model.points().tets;
+    const auto points = static_cast<std::size_t>(model.points().count());
     const auto nodes = static_cast<std::size_t>(model.node_count());
     Region region;
     region.own.assign(ranges.begin(), ranges.end());
@@ -176,14 +181,14 @@ class NodalAverageTreatment final : public VolumetricTreatment {
 
   // The local part of each point's stress and its pressure (see internal_forces) for points begin .. end - 1,
   // the material law called on batches of consecutive points with one material (its vectorised stress_batch).
-  void local_stresses(const Model& model, Index begin, Index end, Index& first_bad) {
-    const auto& weight = model.ip_weights();
+  void local_stresses(const Discretisation& model, Index begin, Index end, Index& first_bad) {
+    const auto& weight = model.points().weights;
     StressBatch batch{};
     double r[StressBatch::kCapacity];
     for (Index first = begin; first < end; first += batch.count) {
-      const Material& material = model.ip_material(first);
+      const Material& material = model.material(first);
       int count = 1;
-      while (count < StressBatch::kCapacity && first + count < end && &model.ip_material(first + count) == &material)
+      while (count < StressBatch::kCapacity && first + count < end && &model.material(first + count) == &material)
         ++count;
       batch.count = count;
       for (int p = 0; p < StressBatch::kCapacity; ++p) {
@@ -212,8 +217,9 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   }
 
   // F, J and J F^-T at the region's far points, J_bar at its near points; -1, or the first inadmissible point.
-  Index averaged_dilatation(const Model& model, std::span<const double> u, const Region& region) {
-    if (const Index bad = model.deformation_gradients(u, F_, region.far); bad >= 0) return bad;
+  Index averaged_dilatation(const ForceKernel& kernel, std::span<const double> u, const Region& region) {
+    const Discretisation& model = kernel.discretisation();
+    if (const Index bad = kernel.deformation_gradients(u, F_, region.far); bad >= 0) return bad;
     const int threads = model.team().size();
     model.team().run([&](int thread) {
       ThreadTeam::for_each_piece_of_share(region.far, thread, threads, [&](Index begin, Index end) {
@@ -226,7 +232,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
       average_at_nodes(model, J_, /*weighted=*/true, region.near_vertices, thread);
       model.team().barrier();
       const auto& tets = model.mesh().tets;
-      const auto& ip_tet = model.ip_tets();
+      const auto& ip_tet = model.points().tets;
       ThreadTeam::for_each_piece_of_share(region.near, thread, threads, [&](Index begin, Index end) {
         for (Index ip = begin; ip < end; ++ip) {
           const auto& tet = tets[ip_tet[ip]];
@@ -239,9 +245,9 @@ class NodalAverageTreatment final : public VolumetricTreatment {
 
   // node_value_[I] = sum over the points p around I of (w_p if weighted) value_p / W_I (times 1/4 if not
   // weighted: each point's value is spread over its tet's four vertices), for thread `thread`'s share of `nodes`.
-  void average_at_nodes(const Model& model, const std::vector<double>& value, bool weighted,
+  void average_at_nodes(const Discretisation& model, const std::vector<double>& value, bool weighted,
                         const std::vector<Index>& nodes, int thread) {
-    const auto& weight = model.ip_weights();
+    const auto& weight = model.points().weights;
     const auto [begin, end] = ThreadTeam::share(static_cast<std::int64_t>(nodes.size()), thread, model.team().size());
     for (auto k = begin; k < end; ++k) {
       const Index node = nodes[static_cast<std::size_t>(k)];
@@ -258,7 +264,7 @@ class NodalAverageTreatment final : public VolumetricTreatment {
   std::vector<double> node_weight_;  // sum of those points' weights
   std::vector<Mat3> F_, cofactor_, stress_;  // per integration point
   std::vector<double> J_, J_bar_, pressure_, node_value_;
-  std::vector<Index> first_bad_;  // per thread of the model's team
+  std::vector<Index> first_bad_;                                     // per thread of the discretisation's team
   std::vector<std::pair<std::vector<PointRange>, Region>> regions_;  // by the ranges they serve
 };
 

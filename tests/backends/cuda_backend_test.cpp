@@ -6,8 +6,8 @@
 #include <random>
 
 #include "mtled/errors.hpp"
+#include "mtled/force_kernel.hpp"
 #include "mtled/io/mesh_writer.hpp"
-#include "mtled/model.hpp"
 #include "test_support.hpp"
 
 namespace mtled {
@@ -25,16 +25,16 @@ std::shared_ptr<StepEngine> cuda_engine() {
   }
 }
 
-std::unique_ptr<Model> make_model(const std::string& material, RowPrecision precision) {
+std::unique_ptr<test::Discretised> make_model(const std::string& material, RowPrecision precision) {
   TetMesh mesh = test::box_mesh(Vec3(0.01, 0.012, 0.008), 6, 7, 5, 0.3, 3);
   const auto shape_functions = test::make<ShapeFunctions>("mmls", json::object());
   json parameters = {{"mu", 722.0}, {"D", 5.57738e-5}, {"density", 1000.0}};
   if (material == "ogden") parameters["alpha"] = -1.3;
-  Model::Options options;
+  Discretisation::Options options;
   options.precision = precision;
-  return std::make_unique<Model>(std::move(mesh), shape_functions,
-                                 std::vector<std::shared_ptr<const Material>>{test::make<Material>(material, parameters)},
-                                 options);
+  return std::make_unique<test::Discretised>(
+      std::move(mesh), shape_functions,
+      std::vector<std::shared_ptr<const Material>>{test::make<Material>(material, parameters)}, options);
 }
 
 std::vector<double> random_field(Index nodes, unsigned seed) {
@@ -46,8 +46,8 @@ std::vector<double> random_field(Index nodes, unsigned seed) {
 }
 
 // Both evaluate f_I = sum_p (w P)_p t_pI from the same stored gradients, in other orders: a few ulps of the largest
-// force (the CPU kernel's own bound against the one-point definition, Model.VectorisedForces...). In single precision
-// too: both store the test gradients grad N + correction rounded to float once (Model::test_gradient) and widen them
+// force (the CPU kernel's own bound against the one-point definition, Discretisation.VectorisedForces...). In single
+// precision too: both store the test gradients grad N + correction rounded to float once (test_gradient) and widen them
 // to double (an H100, 2026-11-27: 5.1e-16 of the largest force in both precisions).
 TEST(CudaBackend, ForcesEqualTheCpusToRoundOffInBothPrecisions) {
   if (!cuda_engine()) GTEST_SKIP() << "no CUDA device";
@@ -55,10 +55,10 @@ TEST(CudaBackend, ForcesEqualTheCpusToRoundOffInBothPrecisions) {
     for (const RowPrecision precision : {RowPrecision::double_precision, RowPrecision::single_precision}) {
       const auto model = make_model(material, precision);
       const auto engine = cuda_engine();
-      engine->setup(*model);
-      const auto u = random_field(model->node_count(), 7);
+      engine->setup(model->kernel);
+      const auto u = random_field(model->discretisation.node_count(), 7);
       std::vector<double> cpu(u.size()), gpu(u.size()), again(u.size());
-      ASSERT_EQ(model->internal_forces(u, cpu), -1);
+      ASSERT_EQ(model->kernel.internal_forces(u, cpu), -1);
       ASSERT_EQ(engine->internal_forces(u, gpu), -1);
       ASSERT_EQ(engine->internal_forces(u, again), -1);
       double difference = 0.0, largest = 0.0;
@@ -79,10 +79,11 @@ TEST(CudaBackend, AnInvertedPointIsReportedLikeTheCpus) {
   if (!cuda_engine()) GTEST_SKIP() << "no CUDA device";
   const auto model = make_model("ogden", RowPrecision::double_precision);
   const auto engine = cuda_engine();
-  engine->setup(*model);
-  std::vector<double> u(3 * static_cast<std::size_t>(model->node_count())), f(u.size());
-  for (Index i = 0; i < model->node_count(); ++i) u[3 * static_cast<std::size_t>(i) + 2] = -2.0 * model->nodes()[i][2];
-  EXPECT_EQ(engine->internal_forces(u, f), model->internal_forces(u, f));
+  engine->setup(model->kernel);
+  std::vector<double> u(3 * static_cast<std::size_t>(model->discretisation.node_count())), f(u.size());
+  for (Index i = 0; i < model->discretisation.node_count(); ++i)
+    u[3 * static_cast<std::size_t>(i) + 2] = -2.0 * model->discretisation.nodes()[i][2];
+  EXPECT_EQ(engine->internal_forces(u, f), model->kernel.internal_forces(u, f));
 }
 
 // The drivers' reads: displacement_at brings u_n at the nodes asked for (gathered on the device), again after the
@@ -91,11 +92,12 @@ TEST(CudaBackend, DisplacementAtBringsTheNodesAskedFor) {
   if (!cuda_engine()) GTEST_SKIP() << "no CUDA device";
   const auto model = make_model("ogden", RowPrecision::double_precision);
   const auto engine = cuda_engine();
-  engine->setup(*model);
+  engine->setup(model->kernel);
   ASSERT_TRUE(engine->spreads_nodes());
-  const auto u = random_field(model->node_count(), 11), u_previous = random_field(model->node_count(), 12);
+  const auto u = random_field(model->discretisation.node_count(), 11),
+             u_previous = random_field(model->discretisation.node_count(), 12);
   engine->set_state(u, u_previous);
-  const Index last = model->node_count() - 1;
+  const Index last = model->discretisation.node_count() - 1;
   for (const std::vector<Index>& nodes : {std::vector<Index>{3, 0, last}, std::vector<Index>{1, 7}}) {
     const std::span<const double> read = engine->displacement_at(nodes);
     for (const Index n : nodes)

@@ -1,45 +1,46 @@
 // The cuda backend's host side, on every machine (no GPU needed): the sliced rows it sends to the device hold
-// exactly the model's rows, and the forces computed from them the way the kernels do (F per point from the point
-// rows, the stress record, each node's sum over its row) are the model's forces.
+// exactly the discretisation's rows, and the forces computed from them the way the kernels do (F per point from the
+// point rows, the stress record, each node's sum over its row) are the force kernel's.
+#include "device_layout.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
 #include <set>
 
-#include "device_layout.hpp"
-#include "mtled/model.hpp"
+#include "mtled/force_kernel.hpp"
 #include "test_support.hpp"
 
 namespace mtled {
 namespace {
 
-std::unique_ptr<Model> make_model(RowPrecision precision) {
+std::unique_ptr<test::Discretised> make_model(RowPrecision precision) {
   TetMesh mesh = test::box_mesh(Vec3(0.01, 0.012, 0.008), 5, 6, 4, 0.3, 3);
   const auto shape_functions = test::make<ShapeFunctions>("mmls", json::object());
   const auto material =
       test::make<Material>("ogden", {{"mu", 722.0}, {"alpha", -1.3}, {"D", 5.57738e-5}, {"density", 1000.0}});
-  Model::Options options;
+  Discretisation::Options options;
   options.precision = precision;
-  return std::make_unique<Model>(std::move(mesh), shape_functions, std::vector<std::shared_ptr<const Material>>{material},
-                                 options);
+  return std::make_unique<test::Discretised>(std::move(mesh), shape_functions,
+                                             std::vector<std::shared_ptr<const Material>>{material}, options);
 }
 
 template <class Real>
-void expect_rows_hold_the_model(const Model& model) {
+void expect_rows_hold_the_model(const Discretisation& model) {
   const auto layout = cuda::build_device_layout<Real>(model);
-  const GradientRows& gradients = model.ip_supports();
+  const GradientRows& gradients = model.gradients();
   // Each node's points in order, with its test gradient there, collected here point by point.
   std::vector<std::vector<std::pair<Index, Vec3>>> tests(static_cast<std::size_t>(model.node_count()));
-  for (Index p = 0; p < model.integration_point_count(); ++p)
+  for (Index p = 0; p < model.points().count(); ++p)
     for (int k = 0; k < gradients.size(p); ++k) {
       const Index node = gradients.node(p, k);
-      tests[static_cast<std::size_t>(node)].emplace_back(p, gradients.gradient(p, k) + model.gradient_correction(p, node));
+      tests[static_cast<std::size_t>(node)].emplace_back(p, test_gradient(model, p, k));
     }
   const auto& points = layout.point_rows;
-  ASSERT_EQ(points.slices(), (model.integration_point_count() + cuda::kSlice - 1) / cuda::kSlice);
+  ASSERT_EQ(points.slices(), (model.points().count() + cuda::kSlice - 1) / cuda::kSlice);
   EXPECT_EQ(points.entries, gradients.entries());
-  for (Index p = 0; p < model.integration_point_count(); ++p) {
+  for (Index p = 0; p < model.points().count(); ++p) {
     const std::int64_t slice = p / cuda::kSlice, lane = p % cuda::kSlice;
     const std::int64_t begin = points.slice_begin[slice], width = (points.slice_begin[slice + 1] - begin) / cuda::kSlice;
     ASSERT_EQ(points.row[static_cast<std::size_t>(p)], p);
@@ -78,7 +79,7 @@ void expect_rows_hold_the_model(const Model& model) {
         for (int c = 0; c < 3; ++c)  // rounded once to the rows' precision
           ASSERT_EQ((c == 0 ? nodes.gx : c == 1 ? nodes.gy : nodes.gz)[at], static_cast<Real>(gradient[c]));
       } else {
-        ASSERT_EQ(nodes.column[at], model.integration_point_count());
+        ASSERT_EQ(nodes.column[at], model.points().count());
       }
     }
   }
@@ -88,25 +89,25 @@ void expect_rows_hold_the_model(const Model& model) {
 }
 
 TEST(CudaLayout, TheSlicedRowsHoldExactlyTheModelsRows) {
-  expect_rows_hold_the_model<double>(*make_model(RowPrecision::double_precision));
-  expect_rows_hold_the_model<float>(*make_model(RowPrecision::single_precision));
+  expect_rows_hold_the_model<double>(make_model(RowPrecision::double_precision)->discretisation);
+  expect_rows_hold_the_model<float>(make_model(RowPrecision::single_precision)->discretisation);
 }
 
-// The kernels' arithmetic on the host, over the sliced rows: the same forces as the model's kernel to round-off
-// (different summation orders only; bound as Model.VectorisedForcesEqualTheOnePointDefinition...).
+// The kernels' arithmetic on the host, over the sliced rows: the same forces as the host's force kernel to round-off
+// (different summation orders only; bound as Discretisation.VectorisedForcesEqualTheOnePointDefinition...).
 TEST(CudaLayout, ForcesFromTheSlicedRowsAreTheModelsForces) {
   const auto model = make_model(RowPrecision::double_precision);
-  const auto layout = cuda::build_device_layout<double>(*model);
+  const auto layout = cuda::build_device_layout<double>(model->discretisation);
   std::mt19937 random(5);
   std::uniform_real_distribution<double> uniform(-3e-4, 3e-4);
-  const auto n = static_cast<std::size_t>(model->node_count());
+  const auto n = static_cast<std::size_t>(model->discretisation.node_count());
   std::vector<double> u(3 * n), expected(3 * n);
   for (double& v : u) v = uniform(random);
-  ASSERT_EQ(model->internal_forces(u, expected), -1);
+  ASSERT_EQ(model->kernel.internal_forces(u, expected), -1);
 
-  std::vector<Mat3> records(static_cast<std::size_t>(model->integration_point_count()) + 1, Mat3::Zero());
+  std::vector<Mat3> records(static_cast<std::size_t>(model->discretisation.points().count()) + 1, Mat3::Zero());
   const auto& points = layout.point_rows;
-  for (Index p = 0; p < model->integration_point_count(); ++p) {
+  for (Index p = 0; p < model->discretisation.points().count(); ++p) {
     const std::int64_t slice = p / cuda::kSlice, lane = p % cuda::kSlice;
     Mat3 F = Mat3::Identity();
     for (std::int64_t e = points.slice_begin[slice] + lane; e < points.slice_begin[slice + 1]; e += cuda::kSlice) {
@@ -115,8 +116,8 @@ TEST(CudaLayout, ForcesFromTheSlicedRowsAreTheModelsForces) {
       F += un * Vec3(points.gx[at], points.gy[at], points.gz[at]).transpose();
     }
     Mat3 S;
-    ASSERT_TRUE(model->ip_material(p).stress(F, S));
-    records[static_cast<std::size_t>(p)] = model->ip_weights()[p] * F * S;
+    ASSERT_TRUE(model->discretisation.material(p).stress(F, S));
+    records[static_cast<std::size_t>(p)] = model->discretisation.points().weights[p] * F * S;
   }
   std::vector<double> f(3 * n, 0.0);
   const auto& nodes = layout.node_rows;

@@ -59,7 +59,7 @@ Outcome run(const json& needle) {
   simulation.run();
   Outcome out;
   out.status = simulation.needle()->status();
-  const Model& model = simulation.model();
+  const Discretisation& model = simulation.discretisation();
   const std::vector<double> u = simulation.interpolated_displacement();
   for (Index i = 0; i < model.node_count(); ++i)
     out.positions.push_back(model.nodes()[i] + Vec3(u[3 * i], u[3 * i + 1], u[3 * i + 2]));
@@ -69,7 +69,7 @@ Outcome run(const json& needle) {
       out.contacts.push_back({out.positions[set->nodes()[k]], set->reactions[k]});
   }
   out.error_bound = simulation.integrator().report().relaxation.value().error_bound;
-  for (double h : model.node_spacing()) out.spacing += h / static_cast<double>(model.node_count());
+  for (double h : model.cloud().spacing) out.spacing += h / static_cast<double>(model.node_count());
   return out;
 }
 

@@ -50,7 +50,7 @@ Outcome run(const json& needle_options, const json& integrator_options = json::o
   simulation.run();
   Outcome out;
   out.status = simulation.needle()->status();
-  const Model& model = simulation.model();
+  const Discretisation& model = simulation.discretisation();
   const std::vector<double> u = simulation.interpolated_displacement();
   for (const NodalConstraints* set : simulation.constraint_sets()) {
     if (set->name == "needle") {
@@ -71,7 +71,7 @@ Outcome run(const json& needle_options, const json& integrator_options = json::o
       out.shaft_offsets.push_back(Vec3(x.x(), x.y(), 0.0));
     }
   }
-  for (double h : model.node_spacing()) out.spacing += h / static_cast<double>(model.node_count());
+  for (double h : model.cloud().spacing) out.spacing += h / static_cast<double>(model.node_count());
   return out;
 }
 

@@ -8,15 +8,15 @@
 #include <cmath>
 #include <random>
 
-#include "mtled/model.hpp"
+#include "mtled/discretisation.hpp"
 #include "shape_function_fixtures.hpp"
 #include "simd_targets.hpp"
 
 namespace mtled::test {
 namespace {
 
-Model::Options points_options(int points_per_tet) {
-  Model::Options options;
+Discretisation::Options points_options(int points_per_tet) {
+  Discretisation::Options options;
   options.integration_points_per_tet = points_per_tet;
   return options;
 }
@@ -302,9 +302,9 @@ TEST(ShapeFunctionsInTheModel, HomogeneousDeformationIsExactAtEveryIntegrationPo
     for (int points_per_tet : {1, 4}) {
       SCOPED_TRACE(c.component + c.block.dump() + " " + std::to_string(points_per_tet) + " points per tet");
       const auto shape_functions = make<ShapeFunctions>(c.component, c.block);
-      Model model(box_mesh(kBlock, 6, 4, 5, 0.3, 7), shape_functions, {std::make_shared<InertTestMaterial>()},
-                  points_options(points_per_tet));
-      const SupportStatistics stats = model.ip_support_statistics();
+      Discretisation model(box_mesh(kBlock, 6, 4, 5, 0.3, 7), shape_functions, {std::make_shared<InertTestMaterial>()},
+                           points_options(points_per_tet));
+      const SupportStatistics stats = model.points().support;
       RecordProperty(fmt::format("{}_{}ip_support_min_mean_max", c.label, points_per_tet),
                      fmt::format("{}/{:.1f}/{}", stats.min, stats.mean, stats.max));
       RecordProperty(fmt::format("{}_{}ip_min_reciprocal_condition", c.label, points_per_tet),
@@ -318,7 +318,7 @@ TEST(ShapeFunctionsInTheModel, HomogeneousDeformationIsExactAtEveryIntegrationPo
       const double tolerance =
           roundoff_bound(ShapeFunctionFit{true, stats.min_reciprocal_condition}, static_cast<std::size_t>(stats.max));
       double worst = 0.0;
-      for (Index ip = 0; ip < model.integration_point_count(); ++ip)
+      for (Index ip = 0; ip < model.points().count(); ++ip)
         worst = std::max(worst, (model.deformation_gradient(ip, u) - Mat3::Identity() - G).norm());
       EXPECT_LT(worst / G.norm(), tolerance);
       std::vector<double> interpolated(u.size());
@@ -335,8 +335,8 @@ TEST(ShapeFunctionsInTheModel, HomogeneousDeformationIsExactAtEveryIntegrationPo
 TEST(ShapeFunctionsInTheModel, SupportsTooSmallForTheBasisAreAnInputError) {
   const auto quadratic = make<ShapeFunctions>("mls", {{"basis", "quadratic"}, {"support_dilatation", 1.0}});
   try {
-    Model model(box_mesh(kBlock, 6, 4, 5, 0.3, 7), quadratic, {std::make_shared<InertTestMaterial>()},
-                points_options(1));
+    Discretisation model(box_mesh(kBlock, 6, 4, 5, 0.3, 7), quadratic, {std::make_shared<InertTestMaterial>()},
+                         points_options(1));
     FAIL() << "a quadratic basis with d_c = 1 cannot be well posed everywhere on this mesh";
   } catch (const InputError& e) {
     ASSERT_FALSE(e.problems().empty());

@@ -60,18 +60,18 @@ SteadyStateDifference difference_from(std::span<const double> u, std::span<const
 // projection, assembled column by column).
 // `at_current_state`: K at the simulation's displacement instead of u = 0.
 double exact_stable_step(const Simulation& simulation, bool constrained = false, bool at_current_state = false) {
-  const Model& model = simulation.model();
+  const ForceKernel& kernel = simulation.force_kernel();
   const auto mass = simulation.mass();
-  const Eigen::Index n = 3 * model.node_count();
+  const Eigen::Index n = 3 * simulation.discretisation().node_count();
   std::vector<double> u(static_cast<std::size_t>(n), 0.0), f(static_cast<std::size_t>(n)), f0(u);
   if (at_current_state) u.assign(simulation.displacement().begin(), simulation.displacement().end());
-  EXPECT_LT(model.internal_forces(u, f0), 0);
+  EXPECT_LT(kernel.internal_forces(u, f0), 0);
   constexpr double kStep = 1e-10;  // m: strains of 1e-7 on a 1 mm spacing, linear to round-off
   Eigen::MatrixXd a(n, n);
   for (Eigen::Index j = 0; j < n; ++j) {
     const double start = u[static_cast<std::size_t>(j)];
     u[static_cast<std::size_t>(j)] = start + kStep;
-    EXPECT_LT(model.internal_forces(u, f), 0);
+    EXPECT_LT(kernel.internal_forces(u, f), 0);
     u[static_cast<std::size_t>(j)] = start;
     for (Eigen::Index i = 0; i < n; ++i)
       a(i, j) = (f[static_cast<std::size_t>(i)] - f0[static_cast<std::size_t>(i)]) / kStep /
@@ -160,7 +160,7 @@ TEST(StableStepMonitor, ConstraintProjectionKeepsConstrainedValuesAndIsMOrthogon
                                             {{"stable_step_every_steps", 1000000}}, true, 0.0));
   Simulation simulation(scene, test::catalog());
   simulation.run();
-  const Model& model = simulation.model();
+  const Discretisation& model = simulation.discretisation();
   const auto mass = simulation.mass();
   const std::size_t n = 3 * static_cast<std::size_t>(model.node_count());
   std::vector<double> v(n), w(n);

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "mtled/force_kernel.hpp"
 #include "mtled/mesh.hpp"
 #include "mtled/plugin_catalog.hpp"
 
@@ -49,6 +50,17 @@ class OneThread {
 // to `jitter` times the cell size (seeded, repeatable). Node sets "x0", "x1", "y0", "y1", "z0", "z1" hold
 // the faces.
 TetMesh box_mesh(Vec3 size, int nx, int ny, int nz, double jitter = 0.0, unsigned seed = 1);
+
+// A discretisation and the force kernel on it, as a Simulation builds them, for tests that need no scene.
+struct Discretised {
+  Discretised(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
+              std::vector<std::shared_ptr<const Material>> materials, Discretisation::Options options,
+              std::shared_ptr<VolumetricTreatment> volumetric = nullptr)
+      : discretisation(std::move(mesh), std::move(shape_functions), std::move(materials), std::move(options)),
+        kernel(discretisation, std::move(volumetric)) {}
+  Discretisation discretisation;
+  ForceKernel kernel;
+};
 
 // A small cylinder of the paper's gel for the needle models' tests: r = 6 mm, height `height`, about 600
 // nodes (spacing 1.3 mm), Ogden mu = 722 Pa, alpha = -1.3, bottom fixed, MMLS, dynamic relaxation over 300

@@ -27,16 +27,16 @@ class TwinNeedles final : public StepMonitor {
     ASSERT_EQ(needles_.size(), 3u);
     const LoadState load{step.time, step.load_fraction, step.step};
     std::vector<Index> nodes;
-    ASSERT_TRUE(needles_[1]->nodes_read(load, *step.model, nodes));
+    ASSERT_TRUE(needles_[1]->nodes_read(load, *step.discretisation, nodes));
     std::vector<double> not_a_number(step.u.size(), std::numeric_limits<double>::quiet_NaN()), shifted(step.u.size());
     for (std::size_t i = 0; i < shifted.size(); ++i)  // by node and component, so that no gradient is left alone
       shifted[i] = step.u[i] + 1e-6 * static_cast<double>(i % 7);
     for (const Index n : nodes)
       for (std::size_t d = 3 * static_cast<std::size_t>(n); d < 3 * static_cast<std::size_t>(n) + 3; ++d)
         not_a_number[d] = shifted[d] = step.u[d];
-    needles_[0]->update(load, *step.model, step.u);
-    needles_[1]->update(load, *step.model, not_a_number);
-    needles_[2]->update(load, *step.model, shifted);
+    needles_[0]->update(load, *step.discretisation, step.u);
+    needles_[1]->update(load, *step.discretisation, not_a_number);
+    needles_[2]->update(load, *step.discretisation, shifted);
     std::sort(nodes.begin(), nodes.end());
     largest_read = std::max(largest_read, static_cast<std::size_t>(std::unique(nodes.begin(), nodes.end()) - nodes.begin()));
     const auto a = needles_[0]->constraints();
@@ -69,7 +69,7 @@ inline void expect_needle_reads_only_what_it_declares(const json& document) {
   Simulation simulation(scene, catalog());
   const auto twin = [&] {
     auto needle = make<NeedleModel>(document["needle"]["type"], document["needle"]);
-    needle->setup(simulation.model().view());
+    needle->setup(simulation.discretisation());
     return needle;
   };
   auto monitor = std::make_shared<TwinNeedles>(std::vector{twin(), twin(), twin()});
@@ -78,7 +78,7 @@ inline void expect_needle_reads_only_what_it_declares(const json& document) {
   EXPECT_TRUE(monitor->punctured);
   EXPECT_GT(monitor->driven, 0);
   EXPECT_GT(monitor->largest_read, 0u);
-  EXPECT_LT(monitor->largest_read, static_cast<std::size_t>(simulation.model().node_count()));
+  EXPECT_LT(monitor->largest_read, static_cast<std::size_t>(simulation.discretisation().node_count()));
 }
 
 }  // namespace mtled::test

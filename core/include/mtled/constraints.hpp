@@ -16,8 +16,8 @@
 #include <span>
 #include <vector>
 
+#include "mtled/discretisation.hpp"
 #include "mtled/interfaces/driver.hpp"
-#include "mtled/model.hpp"
 
 namespace mtled {
 
@@ -56,7 +56,7 @@ class ConstrainedVector {
 
 class ConstraintSystem {
  public:
-  explicit ConstraintSystem(const Model& model) : model_(model) {}
+  explicit ConstraintSystem(const Discretisation& discretisation) : discretisation_(discretisation) {}
 
   // Rebuilds and refactorises when the sets, their revisions or the masses changed. A (node, component)
   // pair claimed by several sets is enforced by the first set only (boundaries come before the needle);
@@ -111,7 +111,7 @@ class ConstraintSystem {
   // y = (Phi M^-1 Phi^T)^-1 y in place, for every component of the block at once (work: scratch).
   void solve(const Block& block, std::vector<double>& y, std::vector<double>& work) const;
 
-  const Model& model_;
+  const Discretisation& discretisation_;
   std::vector<NodalConstraints*> sets_;
   std::vector<std::uint64_t> revisions_;
   std::deque<Block> blocks_;

@@ -1,6 +1,6 @@
 #pragma once
-// The kernel's own StepEngine: the state in host memory, the work on the model's thread team (the force kernel,
-// and the per-node passes of the update and the step's sums). Scenes without a "backend" block run on it; the
+// The kernel's own StepEngine: the state in host memory, the work on the discretisation's thread team (the force
+// kernel, and the per-node passes of the update and the step's sums). Scenes without a "backend" block run on it; the
 // "cpu" backend plugin (plugins/backends/cpu.cpp) names it.
 #include <memory>
 #include <vector>
@@ -12,9 +12,9 @@ namespace mtled {
 
 class CpuEngine : public StepEngine {
  public:
-  void setup(const Model& model) override;
+  void setup(const ForceKernel& kernel) override;
   // With the force kernel's mean time per evaluation and the memory bandwidth it reached (the bytes it must move,
-  // Model::streamed_bytes_per_force_evaluation, over that time): how close the run came to the machine.
+  // ForceKernel::streamed_bytes_per_force_evaluation, over that time): how close the run came to the machine.
   json describe() const override;
 
   void set_mass(std::span<const double> mass) override;
@@ -32,7 +32,7 @@ class CpuEngine : public StepEngine {
   Index internal_forces(std::span<const double> u, std::span<double> f) override;
 
  protected:
-  // f = f_int(u) over every node, for both calls above: the model's force kernel here; an engine that shares the
+  // f = f_int(u) over every node, for both calls above: the host's force kernel here; an engine that shares the
   // integration points between processes computes its own and completes f with the others' contributions.
   virtual Index forces(std::span<const double> u, std::span<double> f);
   // `compute` (a force evaluation), counted and timed as the force kernel's work for describe().
@@ -42,7 +42,7 @@ class CpuEngine : public StepEngine {
     ++evaluations_;
     return compute();
   }
-  const Model& model() const { return *model_; }
+  const ForceKernel& kernel() const { return *kernel_; }
 
   // The state, for an engine that does the per-node work on part of the nodes itself (the mpi backend: a rank's own).
   std::vector<double> u_, u_previous_, prediction_, free_, f_, f_previous_, mass_;
@@ -62,7 +62,7 @@ class CpuEngine : public StepEngine {
   template <class Body>
   void for_each_node_share(Body&& body, int parts);
 
-  const Model* model_ = nullptr;
+  const ForceKernel* kernel_ = nullptr;
   std::vector<std::int64_t> first_bad_;  // per share: the first non-finite unknown of the prediction
   std::vector<Partial> partial_;
   long evaluations_ = 0;  // of the forces (the step's and the monitors' extra ones), and their time

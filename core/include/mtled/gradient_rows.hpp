@@ -1,6 +1,6 @@
 #pragma once
 // The shape-function gradients at the integration points, laid out for the vectorised force kernel
-// (core/src/force_kernel.cpp), which reads them and nothing else of the model.
+// (core/src/force_passes.cpp), which reads them and nothing else of the discretisation.
 #include <cstdint>
 #include <type_traits>
 #include <utility>
@@ -58,6 +58,10 @@ class GradientRows {
   int size(Index row) const { return sizes_[row]; }  // entries, padding excluded
   std::int64_t entries() const { return entries_; }   // all rows, padding excluded
   Index node(Index row, int k) const { return node_at_slot(entry_slot(row, k)); }
+  // Appends the nodes of row r (its support: the u_I the point's F reads).
+  void append_nodes(Index row, std::vector<Index>& out) const {
+    for (int k = 0; k < size(row); ++k) out.push_back(node(row, k));
+  }
   // Where node `node`'s record sits in the kernel's per-node arrays (4 doubles per slot), and the node at a slot.
   Index slot(Index node) const { return slot_of_node_[static_cast<std::size_t>(node)]; }
   Index entry_slot(Index row, int k) const { return record(position(row, k)) / 4; }  // slot(node(row, k))

@@ -4,8 +4,8 @@
 
 #include <string>
 
+#include "mtled/discretisation.hpp"
 #include "mtled/errors.hpp"
-#include "mtled/model_view.hpp"
 
 namespace mtled {
 
@@ -13,7 +13,7 @@ inline std::string point_text(const Vec3& x) { return fmt::format("({:.6g}, {:.6
 
 // An instability located at one node of `model`.
 inline InstabilityError node_instability(long step, double time, std::string what, std::string detail,
-                                         const ModelView& model, Index node) {
+                                         const Discretisation& model, Index node) {
   Diagnostic d;
   d.step = step;
   d.time = time;

@@ -18,7 +18,7 @@
 
 namespace mtled {
 
-class ModelView;
+class Discretisation;
 class TimeIntegrator;
 
 // for_each_share(n, body): body(begin, end) over shares of 0 .. n - 1, on several threads or on the caller.
@@ -47,7 +47,7 @@ struct StepRecord {
   std::span<const double> u;     // displacements at n + 1 (3 per node); empty on steps no monitor reads it
   std::span<const double> mass;  // per node, as the integrator uses it
   StepSums sums;                 // the step's reductions over the unknowns (increments, energies)
-  const ModelView* model = nullptr;
+  const Discretisation* discretisation = nullptr;
   const TimeIntegrator* integrator = nullptr;  // the run's (its report())
   // f = f_int(u) for any state u (where the run computes its forces: the CPU, or a backend's device); -1 or the
   // first inadmissible integration point.

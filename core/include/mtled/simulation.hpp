@@ -1,17 +1,18 @@
 #pragma once
-// A scene built into a running simulation: the mesh, the meshless model, the drivers (boundary conditions
-// and the needle), the integrator, the monitors added to it and the state. Integrators advance the state through the
-// DiscreteSystem below; the kernel's loop (run) calls the monitors and writers after each step.
+// A scene built into a running simulation: the mesh, the meshless discretisation and its force kernel, the drivers
+// (boundary conditions and the needle), the integrator, the monitors added to it and the state. Integrators advance the
+// state through the DiscreteSystem below; the kernel's loop (run) calls the monitors and writers after each step.
 #include <functional>
 #include <memory>
 #include <span>
 #include <vector>
 
 #include "mtled/constraints.hpp"
+#include "mtled/discretisation.hpp"
+#include "mtled/force_kernel.hpp"
 #include "mtled/interfaces/backend.hpp"
 #include "mtled/interfaces/integrator.hpp"
 #include "mtled/json.hpp"
-#include "mtled/model.hpp"
 #include "mtled/monitor.hpp"
 #include "mtled/scene.hpp"
 
@@ -51,7 +52,9 @@ class Simulation final : public DiscreteSystem, private StepControl {
   IncrementSums evaluate_forces(bool increment_sums) override;
   StepSums advance(const UpdateCoefficients& update, double new_time, double new_load_fraction) override;
 
-  const Model& model() const { return *model_; }
+  const Discretisation& discretisation() const { return *discretisation_; }
+  // The host's force kernel (what the CPU engine evaluates with; outputs read the stress the forces used through it).
+  const ForceKernel& force_kernel() const { return *kernel_; }
   double load_fraction() const { return load_.load_fraction; }
   // summary.json's "backend": the engine's own account (type, device, threads).
   json backend() const { return engine_->describe(); }
@@ -82,8 +85,8 @@ class Simulation final : public DiscreteSystem, private StepControl {
   // The masses for every integration point at the setup's largest critical step, each point's step taken at its
   // stiffening (empty: as at rest); returns the density scales.
   std::vector<double> scale_masses(std::span<const double> stiffening);
-  void build_model(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
-                   std::vector<std::shared_ptr<const Material>> materials, std::vector<int> cell_groups);
+  void build_discretisation(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
+                            std::vector<std::shared_ptr<const Material>> materials, std::vector<int> cell_groups);
   void build_drivers(const Scene& scene, PluginCatalog& catalog);
   void update_drivers();
   // u_n where the drivers' coming updates read it (all of it when one of them does not say).
@@ -102,7 +105,8 @@ class Simulation final : public DiscreteSystem, private StepControl {
   [[noreturn]] void inadmissible(Index bad, std::span<const double> u) const;
   [[noreturn]] void not_finite(std::int64_t unknown, double value, double new_time) const;
 
-  std::unique_ptr<Model> model_;
+  std::unique_ptr<Discretisation> discretisation_;
+  std::unique_ptr<ForceKernel> kernel_;
   std::vector<std::shared_ptr<BoundaryCondition>> boundaries_;
   std::shared_ptr<NeedleModel> needle_;
   std::vector<Driver*> drivers_;

@@ -15,6 +15,10 @@ struct SupportRows {
 
   Index rows() const { return offsets.empty() ? 0 : static_cast<Index>(offsets.size() - 1); }
   std::int64_t size(Index row) const { return offsets[row + 1] - offsets[row]; }
+  // Appends the nodes of row r.
+  void append_row(Index row, std::vector<Index>& out) const {
+    out.insert(out.end(), nodes.begin() + offsets[row], nodes.begin() + offsets[row + 1]);
+  }
 };
 
 // The transpose of a relation from `rows` rows (integration points) to `columns` columns (nodes): row c of the

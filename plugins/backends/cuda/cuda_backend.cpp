@@ -15,8 +15,8 @@
 #include "kernels.hpp"
 #include "mtled/constraints.hpp"
 #include "mtled/errors.hpp"
+#include "mtled/force_kernel.hpp"
 #include "mtled/log.hpp"
-#include "mtled/model.hpp"
 #include "mtled/plugin.hpp"
 #include "mtled/scope_timer.hpp"
 
@@ -133,23 +133,24 @@ class CudaBackend final : public StepEngine {
       if (e != nullptr) cudaEventDestroy(e);
   }
 
-  void setup(const Model& model) override {
+  void setup(const ForceKernel& kernel) override {
     check(cudaSetDevice(device_), "cudaSetDevice");
-    if (model.volumetric_treatment() != nullptr)
+    const Discretisation& model = kernel.discretisation();
+    if (kernel.volumetric_treatment() != nullptr)
       refuse("the cuda backend does not support a volumetric treatment yet: leave out /volumetric or run on the CPU "
              "(leave out /backend, or --backend cpu)");
     nodes_ = model.node_count();
-    points_ = model.integration_point_count();
-    std::vector<double> weights(model.ip_weights().begin(), model.ip_weights().end());
+    points_ = model.points().count();
+    std::vector<double> weights(model.points().weights.begin(), model.points().weights.end());
     std::vector<std::uint16_t> materials(static_cast<std::size_t>(points_));
     const std::vector<cuda::Law> laws = read_laws(model, materials);
     const auto start = std::chrono::steady_clock::now();
-    if (model.ip_supports().precision() == RowPrecision::single_precision)
+    if (model.gradients().precision() == RowPrecision::single_precision)
       rows_ = std::make_unique<DeviceRowsOf<float>>(cuda::build_device_layout<float>(model), weights, materials, laws);
     else
       rows_ = std::make_unique<DeviceRowsOf<double>>(cuda::build_device_layout<double>(model), weights, materials, laws);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    precision_ = model.ip_supports().precision() == RowPrecision::single_precision ? "single" : "double";
+    precision_ = model.gradients().precision() == RowPrecision::single_precision ? "single" : "double";
     const std::size_t vector = 4 * (static_cast<std::size_t>(nodes_) + 1);  // and the zero sink node
     for (auto* v : {&u_, &u_previous_, &prediction_, &free_, &f_, &f_previous_, &f_ext_, &scratch_u_, &scratch_f_})
       v->resize(vector);
@@ -335,11 +336,11 @@ class CudaBackend final : public StepEngine {
   }
 
   // One law per distinct material of the model, in the order met; materials[p] = point p's law.
-  std::vector<cuda::Law> read_laws(const Model& model, std::vector<std::uint16_t>& materials) const {
+  std::vector<cuda::Law> read_laws(const Discretisation& model, std::vector<std::uint16_t>& materials) const {
     std::vector<const Material*> seen;
     std::vector<cuda::Law> laws;
     for (Index p = 0; p < points_; ++p) {
-      const Material* material = &model.ip_material(p);
+      const Material* material = &model.material(p);
       auto it = std::find(seen.begin(), seen.end(), material);
       if (it == seen.end()) {
         laws.push_back(law_of(*material));

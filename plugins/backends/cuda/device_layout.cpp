@@ -50,11 +50,11 @@ SlicedRows<Real> slice_rows(const std::vector<std::int32_t>& order, std::int32_t
 }  // namespace
 
 template <class Real>
-DeviceLayout<Real> build_device_layout(const Model& model) {
+DeviceLayout<Real> build_device_layout(const Discretisation& model) {
   DeviceLayout<Real> layout;
   layout.nodes = model.node_count();
-  layout.points = model.integration_point_count();
-  const GradientRows& gradients = model.ip_supports();
+  layout.points = model.points().count();
+  const GradientRows& gradients = model.gradients();
   // Each node's integration points in point order (the supports transposed), and its test gradient at each,
   // t_pI = grad N_I + the consistent-integration correction of I at p.
   const SupportRows node_points = transpose_rows(layout.points, layout.nodes, [&](Index p, auto&& add) {
@@ -66,7 +66,7 @@ DeviceLayout<Real> build_device_layout(const Model& model) {
     for (Index p = 0; p < layout.points; ++p)
       for (int k = 0; k < gradients.size(p); ++k) {
         const Index node = gradients.node(p, k);
-        tests[static_cast<std::size_t>(next[static_cast<std::size_t>(node)]++)] = model.test_gradient(p, k);
+        tests[static_cast<std::size_t>(next[static_cast<std::size_t>(node)]++)] = test_gradient(model, p, k);
       }
   }
 
@@ -94,7 +94,7 @@ DeviceLayout<Real> build_device_layout(const Model& model) {
   return layout;
 }
 
-template DeviceLayout<float> build_device_layout<float>(const Model&);
-template DeviceLayout<double> build_device_layout<double>(const Model&);
+template DeviceLayout<float> build_device_layout<float>(const Discretisation&);
+template DeviceLayout<double> build_device_layout<double>(const Discretisation&);
 
 }  // namespace mtled::cuda

@@ -1,7 +1,7 @@
 #pragma once
-// The CUDA backend's arrays, built on the host from the model's rows (and tested without a GPU): both passes of the
-// force kernel in sliced ELLPACK layout (SELL-C, C = 32, Kreutzer et al., SIAM J. Sci. Comput. 36 (2014) C401), so
-// that the 32 threads of a warp, one row each, read 32 consecutive entries at every step of their loops:
+// The CUDA backend's arrays, built on the host from the discretisation's rows (and tested without a GPU): both passes
+// of the force kernel in sliced ELLPACK layout (SELL-C, C = 32, Kreutzer et al., SIAM J. Sci. Comput. 36 (2014) C401),
+// so that the 32 threads of a warp, one row each, read 32 consecutive entries at every step of their loops:
 //   points: row p = integration point p, columns its support nodes with grad N (F = I + sum u (x) grad N);
 //   nodes:  one row per node, columns the points whose supports hold it with the test gradient
 //           t_pI = grad N_I + the consistent-integration correction (f_I = sum_p (w P)_p t_pI: each node sums its own
@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "mtled/model.hpp"
+#include "mtled/discretisation.hpp"
 #include "sliced_rows.hpp"
 
 namespace mtled::cuda {
@@ -27,8 +27,8 @@ struct DeviceLayout {
   SlicedRows<Real> node_rows;   // columns: points (sink: `points`)
 };
 
-// The layout of the model's rows in the precision they are stored in (Real = float for single-precision rows).
+// The layout of the discretisation's rows in the precision they are stored in (Real = float for single-precision rows).
 template <class Real>
-DeviceLayout<Real> build_device_layout(const Model& model);
+DeviceLayout<Real> build_device_layout(const Discretisation& model);
 
 }  // namespace mtled::cuda

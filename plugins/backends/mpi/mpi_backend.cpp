@@ -21,12 +21,12 @@
 #include <stdexcept>
 
 #include "mesh_partition.hpp"
-#include "mtled/cpu_engine.hpp"
 #include "mtled/constraints.hpp"
+#include "mtled/cpu_engine.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/explicit_update.hpp"
+#include "mtled/force_kernel.hpp"
 #include "mtled/log.hpp"
-#include "mtled/model.hpp"
 #include "mtled/plugin.hpp"
 
 namespace mtled {
@@ -84,25 +84,26 @@ class MpiBackend final : public CpuEngine {
     return groups;
   }
 
-  void setup(const Model& model) override {
-    CpuEngine::setup(model);
+  void setup(const ForceKernel& kernel) override {
+    CpuEngine::setup(kernel);
+    const Discretisation& model = kernel.discretisation();
     // A volumetric treatment that sums over ranges of points computes its own points' contributions (their averages
     // reach a few layers of other ranks' points, which it evaluates too); one that does not is computed whole on
     // every rank (the same answer, no speed-up).
-    const VolumetricTreatment* treatment = model.volumetric_treatment();
+    const VolumetricTreatment* treatment = kernel.volumetric_treatment();
     whole_on_every_rank_ = treatment != nullptr && !treatment->sums_over_ranges();
     if (whole_on_every_rank_ && rank_ == 0)
       log().warn("mpi: the volumetric treatment's forces are computed whole on every rank (not divided between "
                  "the {} ranks): it does not sum over ranges of points", ranks_);
-    const Index n_points = model.integration_point_count();
-    // This rank's groups (cell_groups); groups past the model's last one are empty.
+    const Index n_points = model.points().count();
+    // This rank's groups (cell_groups); groups past the discretisation's last one are empty.
     const auto group_start = [&](int group) {
-      return group < model.group_count() ? model.group_points(group).first : n_points;
+      return group < model.points().group_count() ? model.points().group(group).first : n_points;
     };
     points_ = {group_start(rank_ * (kLayers + 1)), group_start((rank_ + 1) * (kLayers + 1))};
     build_exchange(model);
-    build_ghosts(model);
-    split_points(model);
+    build_ghosts(kernel);
+    split_points(kernel);
     record_partition(model);
   }
 
@@ -317,17 +318,17 @@ class MpiBackend final : public CpuEngine {
       if (bad >= 0) first_bad = std::min<std::int64_t>(first_bad, bad);
     };
     if (whole_on_every_rank_) {
-      note(model().internal_forces(u, f));
+      note(kernel().internal_forces(u, f));
       return first_bad;
     }
     auto start = Clock::now();
     post_receives(forces_.my_values, kForceTag);
     exchange_s_ += seconds_since(start);
-    note(model().internal_forces(u, boundary_f_, boundary_ranges_));
+    note(kernel().internal_forces(u, boundary_f_, boundary_ranges_));
     start = Clock::now();
     send_values(forces_.theirs, forces_.their_values, boundary_f_, kForceTag);
     exchange_s_ += seconds_since(start);
-    note(model().internal_forces(u, f, interior_ranges_, progress_));
+    note(kernel().internal_forces(u, f, interior_ranges_, progress_));
     start = Clock::now();
     MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
     sum_owned(f);
@@ -441,8 +442,8 @@ class MpiBackend final : public CpuEngine {
 
   // The force exchange (the nodes this rank's points support: it sends its contributions to their owners and
   // receives the others' for its own), and every rank's owned nodes in the gathered vector's order.
-  void build_exchange(const Model& model) {
-    const GradientRows& rows = model.ip_supports();
+  void build_exchange(const Discretisation& model) {
+    const GradientRows& rows = model.gradients();
     const std::size_t nodes = static_cast<std::size_t>(model.node_count());
     std::vector<char> supported(nodes, 0);
     for (Index p = points_.first; p < points_.second; ++p)
@@ -469,10 +470,11 @@ class MpiBackend final : public CpuEngine {
 
   // The ghost nodes: those other ranks own whose displacements this rank's force evaluation reads (its points'
   // supports; with a volumetric treatment, the supports of every point whose F its averages use).
-  void build_ghosts(const Model& model) {
-    const GradientRows& rows = model.ip_supports();
+  void build_ghosts(const ForceKernel& kernel) {
+    const Discretisation& model = kernel.discretisation();
+    const GradientRows& rows = model.gradients();
     const std::vector<PointRange> own{points_};
-    const std::vector<PointRange> read = model.points_read(own);  // every point for a treatment computed whole
+    const std::vector<PointRange> read = kernel.points_read(own);  // every point for a treatment computed whole
     std::vector<char> marked(static_cast<std::size_t>(model.node_count()), 0);
     for (const PointRange& range : read)
       for (Index p = range.first; p < range.second; ++p)
@@ -482,15 +484,15 @@ class MpiBackend final : public CpuEngine {
 
   // The boundary points: those whose supports reach a node another rank owns, in blocks of consecutive points
   // (whole blocks keep the kernel's batches long); the rest of the rank's points are its interior.
-  void split_points(const Model& model) {
+  void split_points(const ForceKernel& kernel) {
     constexpr Index kBlock = 16;  // two of the kernel's batches (StressBatch::kCapacity)
-    const GradientRows& rows = model.ip_supports();
+    const GradientRows& rows = kernel.discretisation().gradients();
     boundary_ranges_.clear();
     interior_ranges_.clear();
     boundary_points_ = 0;
     // With a volumetric treatment every point goes first: its averages reach past the boundary points, so the
     // interior would evaluate them again.
-    const bool all_first = model.volumetric_treatment() != nullptr;
+    const bool all_first = kernel.volumetric_treatment() != nullptr;
     for (Index block = points_.first; block < points_.second; block += kBlock) {
       const Index end = std::min(block + kBlock, points_.second);
       bool boundary = false;
@@ -505,7 +507,7 @@ class MpiBackend final : public CpuEngine {
       else
         ranges.emplace_back(block, end);
     }
-    boundary_f_.assign(3 * static_cast<std::size_t>(model.node_count()), 0.0);
+    boundary_f_.assign(3 * static_cast<std::size_t>(kernel.discretisation().node_count()), 0.0);
   }
 
   // The start of an exchange: a receive into each other rank's non-empty buffer in[q].
@@ -593,7 +595,7 @@ class MpiBackend final : public CpuEngine {
   }
 
   // summary.json's "partition": points, owned and ghost nodes per rank, the imbalance, the bytes exchanged.
-  void record_partition(const Model& model) {
+  void record_partition(const Discretisation& model) {
     const auto points = all_ranks(points_.second - points_.first, ranks_);
     const auto ghost_nodes = all_ranks(ghosts_.their_count(), ranks_);
     const auto halo_nodes = all_ranks(forces_.their_count(), ranks_);
@@ -602,7 +604,7 @@ class MpiBackend final : public CpuEngine {
     std::int64_t first = 0;
     for (const PointRange& range : boundary_ranges_) first += range.second - range.first;
     const auto before_sending = all_ranks(first, ranks_);
-    const double mean = static_cast<double>(model.integration_point_count()) / ranks_;
+    const double mean = static_cast<double>(model.points().count()) / ranks_;
     const std::int64_t most = *std::max_element(points.begin(), points.end());
     const auto total = [](const std::vector<std::int64_t>& v) { return std::accumulate(v.begin(), v.end(), std::int64_t{0}); };
     partition_ = {{"method", "METIS_PartMeshDual (tets sharing a face)"},

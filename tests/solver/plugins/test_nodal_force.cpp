@@ -1,6 +1,6 @@
 // A boundary that pushes instead of prescribing, used only to exercise the kernel's force path
 // (Driver::forces()): a total force, ramped with the load, split equally among the nodes of a group.
-#include "mtled/model_view.hpp"
+#include "mtled/discretisation.hpp"
 #include "mtled/node_selector.hpp"
 #include "mtled/plugin.hpp"
 
@@ -16,14 +16,14 @@ class TestNodalForce final : public BoundaryCondition {
   explicit TestNodalForce(const Parameters& p) : group_(p.string("group")), total_(p.vector3("force")) {
     forces_.name = "test_force";
   }
-  void setup(const ModelView& model) override {
+  void setup(const Discretisation& model) override {
     NodeSelector selector;
     selector.kind = NodeSelector::Kind::group;
     selector.group = group_;
-    forces_.nodes = select_nodes(selector, model.mesh(), model.surface(), "/boundaries");
+    forces_.nodes = select_nodes(selector, model.mesh(), model.cloud().surface, "/boundaries");
     forces_.values.assign(forces_.nodes.size(), Vec3::Zero());
   }
-  void update(const LoadState& load, const ModelView&, std::span<const double>) override {
+  void update(const LoadState& load, const Discretisation&, std::span<const double>) override {
     for (Vec3& v : forces_.values) v = load.load_fraction * total_ / static_cast<double>(forces_.nodes.size());
   }
   std::vector<NodalConstraints*> constraints() override { return {}; }

@@ -16,7 +16,7 @@
 
 namespace mtled {
 
-class Model;
+class ForceKernel;
 struct ConstraintBlock;
 struct TetMesh;
 
@@ -25,12 +25,13 @@ class StepEngine {
   static constexpr Category category = Category::backend;
   virtual ~StepEngine();
 
-  // Asked before the model is built: per tet, the group its integration points go in (Model::Options::cell_groups),
+  // Asked before the discretisation is built: per tet, the group its integration points go in
+  // (Discretisation::Options::cell_groups),
   // for an engine that splits the points between processes; empty (the default): one group.
   virtual std::vector<int> cell_groups(const TetMesh& mesh);
-  // Takes the model's precomputed data (rows, weights, materials, threads). Throws InputError when it cannot run
-  // this model, saying what it lacks and how to run on the CPU instead.
-  virtual void setup(const Model& model) = 0;
+  // Takes the host's force kernel and through it the discretisation's precomputed data (rows, weights, materials,
+  // threads). Throws InputError when it cannot run this scene, saying what it lacks and how to run on the CPU instead.
+  virtual void setup(const ForceKernel& kernel) = 0;
   // summary.json's "backend": at least "type", and where it ran.
   virtual json describe() const = 0;
 

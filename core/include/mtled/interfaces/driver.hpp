@@ -12,7 +12,7 @@
 
 namespace mtled {
 
-class ModelView;
+class Discretisation;
 
 // Displacements a driver prescribes: the *interpolated* displacement u(X_K) = sum_I N_I(X_K) u_I at each
 // listed node K, or at each listed material point X_K (reference coordinates inside the body), for the
@@ -68,15 +68,15 @@ class Driver {
  public:
   virtual ~Driver();
   // Chooses nodes; throws InputError naming the scene pointer when the scene cannot be honoured.
-  virtual void setup(const ModelView& model) = 0;
+  virtual void setup(const Discretisation& model) = 0;
   // Sets the prescribed values (and, for drivers whose node sets change, the sets) for `load`, given the
   // current nodal parameters `u` (3 per node).
-  virtual void update(const LoadState& load, const ModelView& model, std::span<const double> u) = 0;
+  virtual void update(const LoadState& load, const Discretisation& model, std::span<const double> u) = 0;
   // For a driver that reads only some of u: appends to `nodes` every node whose u_I the coming update(load, ...)
   // reads (the supports of what it interpolates included) and returns true. An engine that spreads the nodes over
   // processes then brings only those to every process before the update. False (the default): it may read any
   // node, and the whole displacement is gathered before each update.
-  virtual bool nodes_read(const LoadState& load, const ModelView& model, std::vector<Index>& nodes) const;
+  virtual bool nodes_read(const LoadState& load, const Discretisation& model, std::vector<Index>& nodes) const;
   // What this driver imposes: the constraint sets it prescribes and the force sets it applies, both filled
   // by update(). Pointers stay valid for the driver's lifetime; the lists are read once, after setup().
   virtual std::vector<NodalConstraints*> constraints() = 0;

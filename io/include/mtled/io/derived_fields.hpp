@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "mtled/force_kernel.hpp"
 #include "mtled/io/output.hpp"
-#include "mtled/model_view.hpp"
 
 namespace mtled {
 
@@ -20,7 +20,7 @@ struct DerivedField {
   std::string doc;
   // Its value at one integration point with deformation gradient F (det F > 0) and material `material`.
   std::function<void(const Mat3& F, const Material& material, double* value)> compute;
-  // A stress: F is the one the forces use (ModelView::stress_deformation_gradients), not the point's own.
+  // A stress: F is the one the forces use (ForceKernel::stress_deformation_gradients), not the point's own.
   bool stress = false;
 };
 
@@ -28,6 +28,7 @@ struct DerivedField {
 const std::vector<DerivedField>& derived_fields();
 
 // The named fields per background tet, each averaged over the tet's integration points, for nodal parameters u.
-std::vector<CellField> cell_fields(const ModelView& model, std::span<const double> u, const std::vector<std::string>& names);
+std::vector<CellField> cell_fields(const ForceKernel& kernel, std::span<const double> u,
+                                   const std::vector<std::string>& names);
 
 }  // namespace mtled

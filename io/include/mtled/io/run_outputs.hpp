@@ -60,7 +60,7 @@ class HistoryWriter final : public OutputWriter {
 // steps/NNNNNN.vtu every /output/every_steps steps (from the initial state to the last), and series.pvd listing them.
 class SnapshotWriter final : public OutputWriter {
  public:
-  SnapshotWriter(const OutputFolder& folder, const Parameters& output);
+  SnapshotWriter(const OutputFolder& folder, const Parameters& output, const ForceKernel& kernel);
   std::string name() const override { return "snapshots"; }
   void before_run(const StepRecord& initial) override;
   void after_step(const StepRecord& step) override;
@@ -71,6 +71,7 @@ class SnapshotWriter final : public OutputWriter {
   void snapshot(const StepRecord& step);
 
   const OutputFolder& folder_;
+  const ForceKernel& kernel_;  // the stress the forces used, for the cell data
   long every_;
   VtuStyle style_;
   std::vector<std::string> cell_data_;  // the cell fields each step file carries, as result.vtu does
@@ -85,7 +86,7 @@ std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulat
 // `file` (result.vtu, last_good_state.vtu): the mesh with the interpolated displacement of nodal parameters u, the
 // scene's cell data (with_cell_data) and `extra_fields` (the folded tets of a stopped run). Returns the interpolated
 // displacement (3 per node).
-std::vector<double> write_state(const OutputFolder& folder, const std::string& file, const ModelView& model,
+std::vector<double> write_state(const OutputFolder& folder, const std::string& file, const ForceKernel& kernel,
                                 std::span<const double> u, const Parameters& output, bool with_cell_data,
                                 const std::vector<CellField>& extra_fields = {});
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "mtled/discretisation.hpp"
 #include "mtled/interfaces/driver.hpp"
-#include "mtled/model_view.hpp"
 
 namespace mtled {
 
@@ -46,24 +46,24 @@ MarkupsTrajectory parse_markups_trajectory(const std::string& text, const std::s
 // (LPS and RAS differ in the sign of x and y) where the mesh records its frame (label maps, Slicer's files); then
 // refuses an entry point that is off the body (no surface node within 1.5 mean edge lengths) or a path that meets
 // no nodes of the body, with the scene pointer and a suggestion.
-void place_needle_path(NeedlePath& path, const ModelView& model, const Parameters& p);
+void place_needle_path(NeedlePath& path, const Discretisation& model, const Parameters& p);
 
 // Mean edge length of the surface nodes nearest the entry: the local node spacing where the needle enters.
-double spacing_at_entry(const NeedlePath& path, const ModelView& model);
+double spacing_at_entry(const NeedlePath& path, const Discretisation& model);
 
 // The footprint, the surface nodes the tip meets first: those within half the entry's node `spacing` of the entry's
 // plane and within `radius` of the axis, or the surface node nearest the entry when none is.
-std::vector<Index> footprint_nodes(const NeedlePath& path, const ModelView& model, double spacing, double radius);
+std::vector<Index> footprint_nodes(const NeedlePath& path, const Discretisation& model, double spacing, double radius);
 
 // The puncture test both needle models share: the largest principal Green strain (in absolute value) at the
 // integration points within `radius` of the tip.
 class TipStrainWatch {
  public:
   // Keeps the integration points that a tip anywhere along the path can come within `radius` of.
-  void setup(const NeedlePath& path, const ModelView& model, double radius);
-  double largest(const ModelView& model, std::span<const double> u, const Vec3& tip) const;
+  void setup(const NeedlePath& path, const Discretisation& model, double radius);
+  double largest(const Discretisation& model, std::span<const double> u, const Vec3& tip) const;
   // Appends the nodes largest(model, u, tip) reads.
-  void append_nodes_read(const ModelView& model, const Vec3& tip, std::vector<Index>& nodes) const;
+  void append_nodes_read(const Discretisation& model, const Vec3& tip, std::vector<Index>& nodes) const;
 
  private:
   std::vector<Index> watched_;

@@ -1,7 +1,6 @@
-// The meshless model and the essential-boundary-condition projection, on irregular clouds, through the real
-// plugins: mass, forces, thread independence, discrete energy consistency, constraints to round-off.
-#include "mtled/model.hpp"
-
+// The meshless discretisation, its force kernel and the essential-boundary-condition projection, on irregular
+// clouds, through the real plugins: mass, forces, thread independence, discrete energy consistency, constraints to
+// round-off.
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -15,6 +14,7 @@
 #include <thread>
 
 #include "mtled/constraints.hpp"
+#include "mtled/force_kernel.hpp"
 #include "simd_targets.hpp"
 #include "test_support.hpp"
 
@@ -24,20 +24,21 @@ namespace {
 constexpr double kMu = 1000.0;
 constexpr double kD = 4.02684e-5;  // nu = 0.49
 
-std::unique_ptr<Model> make_model(const std::string& shape_function = "mls", double jitter = 0.25, int n = 5,
-                                  const std::string& material = "neo_hookean", bool consistent = true,
-                                  bool nodal_average = false,
-                                  RowPrecision precision = RowPrecision::double_precision) {
+std::unique_ptr<test::Discretised> make_model(const std::string& shape_function = "mls", double jitter = 0.25,
+                                              int n = 5, const std::string& material = "neo_hookean",
+                                              bool consistent = true, bool nodal_average = false,
+                                              RowPrecision precision = RowPrecision::double_precision) {
   TetMesh mesh = test::box_mesh(Vec3(0.01, 0.01, 0.01), n, n, n, jitter, 7);
   const auto sf = test::make<ShapeFunctions>(shape_function, json::object());
   json parameters = {{"mu", kMu}, {"D", kD}, {"density", 1000.0}};
   if (material == "ogden") parameters["alpha"] = -1.3;
   const auto m = test::make<Material>(material, parameters);
-  Model::Options options;
+  Discretisation::Options options;
   options.consistent_integration = consistent;
   options.precision = precision;
-  if (nodal_average) options.volumetric = test::make<VolumetricTreatment>("nodal_average", json::object());
-  return std::make_unique<Model>(std::move(mesh), sf, std::vector<std::shared_ptr<const Material>>{m}, options);
+  return std::make_unique<test::Discretised>(
+      std::move(mesh), sf, std::vector<std::shared_ptr<const Material>>{m}, options,
+      nodal_average ? test::make<VolumetricTreatment>("nodal_average", json::object()) : nullptr);
 }
 
 std::vector<double> random_field(Index nodes, double amplitude, unsigned seed) {
@@ -194,26 +195,27 @@ TEST(GradientRows, TestGradientsAreTheGradientsUntilSetThenAStoredCopy) {
 
 // Single-precision rows store grad N + the correction of consistent integration once (the scatter then streams them);
 // double rows leave the kernel to form it (a stored copy would double their bytes).
-TEST(Model, SinglePrecisionRowsStoreTheTestGradientsDoubleRowsFormThem) {
+TEST(Discretisation, SinglePrecisionRowsStoreTheTestGradientsDoubleRowsFormThem) {
   const auto exact = make_model("mmls", 0.3, 4, "ogden", true);
-  EXPECT_FALSE(exact->ip_supports().has_own_test_gradients());
+  EXPECT_FALSE(exact->discretisation.gradients().has_own_test_gradients());
   const auto single = make_model("mmls", 0.3, 4, "ogden", true, false, RowPrecision::single_precision);
-  const GradientRows& rows = single->ip_supports();
+  const GradientRows& rows = single->discretisation.gradients();
   ASSERT_TRUE(rows.has_own_test_gradients());
   double largest_correction = 0.0;
   for (Index ip = 0; ip < rows.rows(); ++ip)
     for (int k = 0; k < rows.size(ip); ++k) {
-      const Vec3 correction = single->gradient_correction(ip, rows.node(ip, k));
-      largest_correction = std::max(largest_correction, correction.cwiseAbs().maxCoeff());
-      const Vec3 expected = rounded_to_float(rows.gradient(ip, k) + correction);
+      const Vec3 test = test_gradient(single->discretisation, ip, k);
+      largest_correction = std::max(largest_correction, (test - rows.gradient(ip, k)).cwiseAbs().maxCoeff());
+      const Vec3 expected = rounded_to_float(test);
       ASSERT_EQ(rows.stored_test_gradient(ip, k), expected) << "point " << ip << ", entry " << k;
     }
   EXPECT_GT(largest_correction, 0.0) << "the corrections took part";
   const auto uncorrected = make_model("mmls", 0.3, 4, "ogden", false, false, RowPrecision::single_precision);
-  EXPECT_FALSE(uncorrected->ip_supports().has_own_test_gradients()) << "nothing to store without corrections";
+  EXPECT_FALSE(uncorrected->discretisation.gradients().has_own_test_gradients())
+      << "nothing to store without corrections";
 }
 
-TEST(Model, IntegrationPointsFollowTheirCellsThroughSpace) {
+TEST(Discretisation, IntegrationPointsFollowTheirCellsThroughSpace) {
   // A mesh whose cells come in random order: the model must still visit them so that consecutive points are
   // neighbours (the force kernel's cache depends on it), every cell's points together.
   const int n = 12;
@@ -236,13 +238,13 @@ TEST(Model, IntegrationPointsFollowTheirCellsThroughSpace) {
   const double shuffled = mean_jump(generator_order);
   const auto sf = test::make<ShapeFunctions>("mls", json::object());
   const auto m = test::make<Material>("neo_hookean", {{"mu", kMu}, {"D", kD}, {"density", 1000.0}});
-  const Model::Options four_points_per_cell = [] {
-    Model::Options o;
+  const Discretisation::Options four_points_per_cell = [] {
+    Discretisation::Options o;
     o.integration_points_per_tet = 4;
     return o;
   }();
-  const Model model(mesh, sf, {m}, four_points_per_cell);
-  const auto& ip_tet = model.ip_tets();
+  const Discretisation model(mesh, sf, {m}, four_points_per_cell);
+  const auto& ip_tet = model.points().tets;
   ASSERT_EQ(ip_tet.size(), 4 * mesh.tets.size());
   std::vector<Index> visited;
   for (std::size_t p = 0; p < ip_tet.size(); p += 4) {
@@ -261,9 +263,9 @@ TEST(Model, IntegrationPointsFollowTheirCellsThroughSpace) {
   EXPECT_LT(ordered, 2.0 * cell);
 }
 
-TEST(Model, LumpedMassIsTheBodyMass) {
+TEST(Discretisation, LumpedMassIsTheBodyMass) {
   const auto model = make_model();
-  const auto mass = model->lumped_mass();
+  const auto mass = model->discretisation.lumped_mass();
   double total = 0.0;
   for (double m : mass) {
     EXPECT_GT(m, 0.0);
@@ -272,27 +274,28 @@ TEST(Model, LumpedMassIsTheBodyMass) {
   EXPECT_NEAR(total, 1000.0 * 1e-6, 1e-15);  // rho V; every integration point gives away exactly rho w
 }
 
-TEST(Model, RigidMotionsCarryNoForce) {
+TEST(Discretisation, RigidMotionsCarryNoForce) {
   // Linear reproduction makes F exactly the rotation, so S = 0 and f = 0 up to round-off, at any angle.
   const auto model = make_model("mls");
   const Eigen::AngleAxisd rotation(0.7, Vec3(1, 2, 3).normalized());
-  std::vector<double> u(3 * static_cast<std::size_t>(model->node_count()));
-  for (Index i = 0; i < model->node_count(); ++i) {
-    const Vec3 x = model->nodes()[i];
+  std::vector<double> u(3 * static_cast<std::size_t>(model->discretisation.node_count()));
+  for (Index i = 0; i < model->discretisation.node_count(); ++i) {
+    const Vec3 x = model->discretisation.nodes()[i];
     const Vec3 d = rotation * x - x + Vec3(0.003, -0.001, 0.002);
     for (int c = 0; c < 3; ++c) u[3 * i + c] = d[c];
   }
   std::vector<double> f(u.size());
-  ASSERT_EQ(model->internal_forces(u, f), -1);
+  ASSERT_EQ(model->kernel.internal_forces(u, f), -1);
   // Force scale of a 1% strain: mu * 0.01 * area of an integration cell.
   const double scale = kMu * 0.01 * 4e-6;
   EXPECT_LT(max_abs(f), 1e-9 * scale);
-  EXPECT_NEAR(model->strain_energy(u), 0.0, 1e-18);
+  EXPECT_NEAR(model->kernel.strain_energy(u), 0.0, 1e-18);
 }
 
 // Largest |dE/du_i - f_i| over every `stride`-th unknown, by central differences with h = 1e-8 m on u ~ 1e-4 m
 // (truncation error O(h^2) times the third derivative of E, round-off O(eps E / h)).
-double worst_gradient_error(const Model& model, std::vector<double> u, std::span<const double> f, std::size_t stride) {
+double worst_gradient_error(const ForceKernel& model, std::vector<double> u, std::span<const double> f,
+                            std::size_t stride) {
   const double h = 1e-8;
   double worst = 0.0;
   for (std::size_t i = 0; i < u.size(); i += stride) {
@@ -307,52 +310,53 @@ double worst_gradient_error(const Model& model, std::vector<double> u, std::span
   return worst;
 }
 
-TEST(Model, InternalForcesAreTheGradientOfTheDiscreteEnergy) {
+TEST(Discretisation, InternalForcesAreTheGradientOfTheDiscreteEnergy) {
   // Without the integration correction (a Bubnov-Galerkin method), f_I = sum w F S grad N_I must equal
   // dE/du_I, E = sum w W(F(u)): checks the assembly, the CSR storage and the materials together.
   for (const std::string material : {"neo_hookean", "ogden"}) {
     const auto model = make_model("mls", 0.25, 4, material, /*consistent=*/false);
-    const auto u = random_field(model->node_count(), 2e-4, 3);
+    const auto u = random_field(model->discretisation.node_count(), 2e-4, 3);
     std::vector<double> f(u.size());
-    ASSERT_EQ(model->internal_forces(u, f), -1);
-    EXPECT_LT(worst_gradient_error(*model, u, f, 17), 1e-6 * max_abs(f)) << material;
+    ASSERT_EQ(model->kernel.internal_forces(u, f), -1);
+    EXPECT_LT(worst_gradient_error(model->kernel, u, f, 17), 1e-6 * max_abs(f)) << material;
   }
 }
 
-TEST(Model, AveragedDilatationForcesAreTheGradientOfTheirEnergy) {
+TEST(Discretisation, AveragedDilatationForcesAreTheGradientOfTheirEnergy) {
   // With nodal volumetric averaging the energy is sum w W(F_bar), F_bar = (J_bar / J)^(1/3) F, and J_bar couples
   // neighbouring points: the forces must still be its exact gradient (what makes relaxation and the energy
   // monitor sound). Same finite-difference check as above; a strong random field so that J varies.
   for (const std::string material : {"neo_hookean", "ogden"}) {
     const auto model = make_model("mmls", 0.25, 4, material, /*consistent=*/false, /*nodal_average=*/true);
-    const auto u = random_field(model->node_count(), 4e-4, 5);
+    const auto u = random_field(model->discretisation.node_count(), 4e-4, 5);
     std::vector<double> f(u.size());
-    ASSERT_EQ(model->internal_forces(u, f), -1);
-    EXPECT_LT(worst_gradient_error(*model, u, f, 13), 1e-6 * max_abs(f)) << material;
+    ASSERT_EQ(model->kernel.internal_forces(u, f), -1);
+    EXPECT_LT(worst_gradient_error(model->kernel, u, f, 13), 1e-6 * max_abs(f)) << material;
   }
 }
 
-TEST(Model, AveragedDilatationChangesNothingForAHomogeneousDeformation) {
+TEST(Discretisation, AveragedDilatationChangesNothingForAHomogeneousDeformation) {
   // J is the same everywhere, so J_bar = J and F_bar = F: forces equal the per-point ones to round-off.
   const auto plain = make_model("mmls", 0.25, 5, "ogden", true, false);
   const auto averaged = make_model("mmls", 0.25, 5, "ogden", true, true);
   Mat3 G;
   G << -0.08, 0.02, 0.01, 0.03, 0.05, -0.02, 0.0, 0.04, -0.12;
-  std::vector<double> u(3 * static_cast<std::size_t>(plain->node_count()));
-  for (Index i = 0; i < plain->node_count(); ++i) {
-    const Vec3 d = G * plain->nodes()[i];
+  std::vector<double> u(3 * static_cast<std::size_t>(plain->discretisation.node_count()));
+  for (Index i = 0; i < plain->discretisation.node_count(); ++i) {
+    const Vec3 d = G * plain->discretisation.nodes()[i];
     for (int c = 0; c < 3; ++c) u[3 * i + c] = d[c];
   }
   std::vector<double> one(u.size()), two(u.size());
-  ASSERT_EQ(plain->internal_forces(u, one), -1);
-  ASSERT_EQ(averaged->internal_forces(u, two), -1);
+  ASSERT_EQ(plain->kernel.internal_forces(u, one), -1);
+  ASSERT_EQ(averaged->kernel.internal_forces(u, two), -1);
   double difference = 0.0;
   for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(one[i] - two[i]));
   EXPECT_LT(difference, 1e-10 * max_abs(one));
-  EXPECT_NEAR(averaged->strain_energy(u), plain->strain_energy(u), 1e-12 * plain->strain_energy(u));
+  EXPECT_NEAR(averaged->kernel.strain_energy(u), plain->kernel.strain_energy(u),
+              1e-12 * plain->kernel.strain_energy(u));
 }
 
-TEST(Model, ConsistentIntegrationBalancesAHomogeneousStressWithNodalBoundaryTerms) {
+TEST(Discretisation, ConsistentIntegrationBalancesAHomogeneousStressWithNodalBoundaryTerms) {
   // With the correction, sum_ip w (grad N_I + xi_I) = sum_K N_I(X_K) A_K (A_K: a third of the outward area of
   // the boundary faces at node K). So for an affine field (uniform P), f_I = sum_K N_I(X_K) P A_K: nodal
   // boundary terms that reactions or zero tractions balance exactly. This is the discrete patch test.
@@ -360,26 +364,27 @@ TEST(Model, ConsistentIntegrationBalancesAHomogeneousStressWithNodalBoundaryTerm
     const auto model = make_model(sf, 0.3, 4);
     Mat3 G;
     G << 0.02, 0.01, -0.03, 0.0, -0.05, 0.01, 0.02, 0.0, 0.04;
-    std::vector<double> u(3 * static_cast<std::size_t>(model->node_count()));
-    for (Index i = 0; i < model->node_count(); ++i) {
-      const Vec3 d = G * model->nodes()[i];
+    std::vector<double> u(3 * static_cast<std::size_t>(model->discretisation.node_count()));
+    for (Index i = 0; i < model->discretisation.node_count(); ++i) {
+      const Vec3 d = G * model->discretisation.nodes()[i];
       for (int c = 0; c < 3; ++c) u[3 * i + c] = d[c];
     }
     std::vector<double> f(u.size());
-    ASSERT_EQ(model->internal_forces(u, f), -1);
+    ASSERT_EQ(model->kernel.internal_forces(u, f), -1);
     Mat3 S;
     const Mat3 F = Mat3::Identity() + G;
-    ASSERT_TRUE(model->ip_material(0).stress(F, S));
+    ASSERT_TRUE(model->discretisation.material(0).stress(F, S));
     const Mat3 P = F * S;
-    std::vector<Vec3> area(static_cast<std::size_t>(model->node_count()), Vec3::Zero());
-    for (const auto& face : boundary_faces(model->mesh())) {
-      const Vec3& a = model->nodes()[face[0]];
-      const Vec3 share = (model->nodes()[face[1]] - a).cross(model->nodes()[face[2]] - a) / 6.0;
+    std::vector<Vec3> area(static_cast<std::size_t>(model->discretisation.node_count()), Vec3::Zero());
+    for (const auto& face : boundary_faces(model->discretisation.mesh())) {
+      const Vec3& a = model->discretisation.nodes()[face[0]];
+      const Vec3 share =
+          (model->discretisation.nodes()[face[1]] - a).cross(model->discretisation.nodes()[face[2]] - a) / 6.0;
       for (Index v : face) area[v] += share;
     }
     std::vector<double> expected(u.size(), 0.0);
-    const SupportRows& psi = model->node_interpolation();
-    for (Index k = 0; k < model->node_count(); ++k) {
+    const SupportRows& psi = model->discretisation.interpolation();
+    for (Index k = 0; k < model->discretisation.node_count(); ++k) {
       for (std::int64_t e = psi.offsets[k]; e < psi.offsets[k + 1]; ++e) {
         const Vec3 term = psi.values[e] * (P * area[k]);
         for (int c = 0; c < 3; ++c) expected[3 * static_cast<std::size_t>(psi.nodes[e]) + c] += term[c];
@@ -391,18 +396,18 @@ TEST(Model, ConsistentIntegrationBalancesAHomogeneousStressWithNodalBoundaryTerm
   }
 }
 
-TEST(Model, InternalForcesSumToZeroForAnyDeformation) {
+TEST(Discretisation, InternalForcesSumToZeroForAnyDeformation) {
   // Momentum balance of the discrete equations: the internal forces of any state sum to zero, so the
   // reactions of a body at rest balance its external loads. With consistent integration this needs the
-  // corrections at each integration point to sum to zero (Model::Options); the earlier per-node constant
+  // corrections at each integration point to sum to zero (Discretisation::Options); the earlier per-node constant
   // correction left |sum f| at 0.4-0.6% of sum |f| here. Bound: round-off of sums of about 4,000 terms.
   for (const std::string& sf : test::catalog().names(Category::shape_function))
     for (const bool consistent : {true, false})
       for (const bool nodal_average : {false, true}) {
         const auto model = make_model(sf, 0.3, 5, "ogden", consistent, nodal_average);
-        const auto u = random_field(model->node_count(), 3e-4, 13);
+        const auto u = random_field(model->discretisation.node_count(), 3e-4, 13);
         std::vector<double> f(u.size());
-        ASSERT_EQ(model->internal_forces(u, f), -1);
+        ASSERT_EQ(model->kernel.internal_forces(u, f), -1);
         const auto [sum, magnitude] = net_force(f);
         EXPECT_LE(sum.norm(), 1e-12 * magnitude)
             << sf << " consistent " << consistent << " nodal_average " << nodal_average << ": sum " << sum.transpose();
@@ -411,14 +416,14 @@ TEST(Model, InternalForcesSumToZeroForAnyDeformation) {
   // rounding (2^-24 of each), which mostly cancels over a support: the imbalance stays under one float rounding of
   // the total.
   const auto single = make_model("mmls", 0.3, 5, "ogden", true, false, RowPrecision::single_precision);
-  const auto u = random_field(single->node_count(), 3e-4, 13);
+  const auto u = random_field(single->discretisation.node_count(), 3e-4, 13);
   std::vector<double> f(u.size());
-  ASSERT_EQ(single->internal_forces(u, f), -1);
+  ASSERT_EQ(single->kernel.internal_forces(u, f), -1);
   const auto [sum, magnitude] = net_force(f);
   EXPECT_LE(sum.norm(), 0x1p-24 * magnitude) << "single precision: sum " << sum.transpose();
 }
 
-TEST(Model, ForcesDoNotDependOnTheThreadCount) {
+TEST(Discretisation, ForcesDoNotDependOnTheThreadCount) {
   // A model sizes its per-thread buffers (and so its team) for the thread count when it is built, and ctest
   // runs with OMP_NUM_THREADS=1: build one model per thread count. The rule holds within each precision of the rows.
   for (const auto& [nodal_average, precision] :
@@ -430,11 +435,11 @@ TEST(Model, ForcesDoNotDependOnTheThreadCount) {
     omp_set_num_threads(2);
     const auto parallel = make_model("mls", 0.3, 6, "neo_hookean", true, nodal_average, precision);
     omp_set_num_threads(saved);
-    ASSERT_EQ(parallel->team().size(), 2);
-    const auto u = random_field(serial->node_count(), 3e-4, 11);
+    ASSERT_EQ(parallel->discretisation.team().size(), 2);
+    const auto u = random_field(serial->discretisation.node_count(), 3e-4, 11);
     std::vector<double> one(u.size()), two(u.size());
-    serial->internal_forces(u, one);
-    parallel->internal_forces(u, two);
+    serial->kernel.internal_forces(u, one);
+    parallel->kernel.internal_forces(u, two);
     // Summation order differs only across the two per-thread buffers: a few ulps of the largest force.
     double difference = 0.0;
     for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(one[i] - two[i]));
@@ -450,7 +455,7 @@ TEST(Model, ForcesDoNotDependOnTheThreadCount) {
 // whole sum on one and on two threads, with and without the averaged dilatation (whose points' stresses need the
 // points around them, inside the ranges or not); the progress call comes only from the calling thread, between
 // points. Bound: the same terms summed in another grouping (a few ulps of the largest force).
-TEST(Model, ForcesOverRangesOfPointsAddUpToTheWhole) {
+TEST(Discretisation, ForcesOverRangesOfPointsAddUpToTheWhole) {
   for (const bool nodal_average : {false, true})
     for (const int threads : {1, 2}) {
       const int saved = omp_get_max_threads();
@@ -458,21 +463,23 @@ TEST(Model, ForcesOverRangesOfPointsAddUpToTheWhole) {
       const auto model = make_model("mmls", 0.3, 18, "ogden", true, nodal_average);
       omp_set_num_threads(saved);
       const std::string label = std::to_string(threads) + " threads, nodal_average " + std::to_string(nodal_average);
-      const Index n = model->integration_point_count();
+      const Index n = model->discretisation.points().count();
       ASSERT_GT(n, 14 * 2048) << "too few points for the progress calls to be tested";
-      const auto u = random_field(model->node_count(), 5e-5, 17);  // a spacing of 0.6 mm
+      const auto u = random_field(model->discretisation.node_count(), 5e-5, 17);  // a spacing of 0.6 mm
       std::vector<double> whole(u.size()), first(u.size(), 1.0), second(u.size(), 1.0);
-      ASSERT_EQ(model->internal_forces(u, whole), -1);
+      ASSERT_EQ(model->kernel.internal_forces(u, whole), -1);
       const std::vector<PointRange> some = {{n / 2 + 3, n - 5}, {0, n / 5}};
       const std::vector<PointRange> rest = {{n / 5, n / 2 + 3}, {n - 5, n}};
       int calls = 0;
       const auto caller = std::this_thread::get_id();
       bool other_thread = false;
-      ASSERT_EQ(model->internal_forces(u, first, some), -1);
-      ASSERT_EQ(model->internal_forces(u, second, rest, [&] {
-        ++calls;
-        other_thread = other_thread || std::this_thread::get_id() != caller;
-      }), -1);
+      ASSERT_EQ(model->kernel.internal_forces(u, first, some), -1);
+      ASSERT_EQ(model->kernel.internal_forces(u, second, rest,
+                                              [&] {
+                                                ++calls;
+                                                other_thread = other_thread || std::this_thread::get_id() != caller;
+                                              }),
+                -1);
       double difference = 0.0;
       for (std::size_t i = 0; i < u.size(); ++i)
         difference = std::max(difference, std::abs(first[i] + second[i] - whole[i]));
@@ -480,7 +487,7 @@ TEST(Model, ForcesOverRangesOfPointsAddUpToTheWhole) {
       EXPECT_GT(max_abs(first), 0.1 * max_abs(whole)) << label;
       // A range's points alone: a node no point of the range supports gets zero, not what f held.
       std::vector<double> none(u.size(), 1.0);
-      ASSERT_EQ(model->internal_forces(u, none, std::vector<PointRange>{}), -1);
+      ASSERT_EQ(model->kernel.internal_forces(u, none, std::vector<PointRange>{}), -1);
       EXPECT_EQ(max_abs(none), 0.0) << label;
       if (nodal_average) continue;  // the treatment's passes take no progress call
       // The calling thread's share of `rest` (about half of it on two threads) in steps of 2,048 points.
@@ -498,20 +505,20 @@ TEST(Model, ForcesOverRangesOfPointsAddUpToTheWhole) {
 // about 2e-15 of the largest force; 1e-13 leaves room for other clouds while any missing term (the gradient
 // correction is about 1e-3 of the gradients) would be far above it. The averaged-dilatation path shares the kernel's gather and scatter:
 // it must give the baseline's forces on every instruction set.
-TEST(Model, VectorisedForcesEqualTheOnePointDefinitionOnEveryInstructionSet) {
+TEST(Discretisation, VectorisedForcesEqualTheOnePointDefinitionOnEveryInstructionSet) {
   for (const std::string material : {"neo_hookean", "ogden"}) {
     const auto model = make_model("mmls", 0.3, 5, material);
-    const auto u = random_field(model->node_count(), 3e-4, 5);
+    const auto u = random_field(model->discretisation.node_count(), 3e-4, 5);
     std::vector<double> reference(u.size(), 0.0);
-    const GradientRows& rows = model->ip_supports();
-    for (Index ip = 0; ip < model->integration_point_count(); ++ip) {
-      const Mat3 F = model->deformation_gradient(ip, u);
+    const GradientRows& rows = model->discretisation.gradients();
+    for (Index ip = 0; ip < model->discretisation.points().count(); ++ip) {
+      const Mat3 F = model->discretisation.deformation_gradient(ip, u);
       Mat3 S;
-      ASSERT_TRUE(model->ip_material(ip).stress(F, S));
-      const Mat3 P = model->ip_weights()[ip] * F * S;
+      ASSERT_TRUE(model->discretisation.material(ip).stress(F, S));
+      const Mat3 P = model->discretisation.points().weights[ip] * F * S;
       for (int k = 0; k < rows.size(ip); ++k) {
         const Index node = rows.node(ip, k);
-        const Vec3 f = P * (rows.gradient(ip, k) + model->gradient_correction(ip, node));
+        const Vec3 f = P * test_gradient(model->discretisation, ip, k);
         for (int c = 0; c < 3; ++c) reference[3 * static_cast<std::size_t>(node) + c] += f[c];
       }
     }
@@ -519,7 +526,7 @@ TEST(Model, VectorisedForcesEqualTheOnePointDefinitionOnEveryInstructionSet) {
     test::for_each_simd_target([&](const std::string& target) {
       ++targets;
       std::vector<double> f(u.size());
-      ASSERT_EQ(model->internal_forces(u, f), -1);
+      ASSERT_EQ(model->kernel.internal_forces(u, f), -1);
       double difference = 0.0;
       for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(f[i] - reference[i]));
       EXPECT_LE(difference, 1e-13 * max_abs(reference)) << material << " on " << target;
@@ -528,17 +535,17 @@ TEST(Model, VectorisedForcesEqualTheOnePointDefinitionOnEveryInstructionSet) {
     EXPECT_GE(targets, 2) << "at least the CPU's best and the baseline";
   }
   const auto averaged = make_model("mls", 0.3, 5, "ogden", true, true);
-  const auto u = random_field(averaged->node_count(), 3e-4, 6);
+  const auto u = random_field(averaged->discretisation.node_count(), 3e-4, 6);
   std::vector<double> baseline(u.size());
   test::for_each_simd_target([&](const std::string& target) {
     std::vector<double> f(u.size());
-    ASSERT_EQ(averaged->internal_forces(u, f), -1);
+    ASSERT_EQ(averaged->kernel.internal_forces(u, f), -1);
     if (target == "EMU128" || target == "SCALAR") baseline = f;
   });
   ASSERT_GT(max_abs(baseline), 0.0);
   test::for_each_simd_target([&](const std::string& target) {
     std::vector<double> f(u.size());
-    averaged->internal_forces(u, f);
+    averaged->kernel.internal_forces(u, f);
     double difference = 0.0;
     for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(f[i] - baseline[i]));
     EXPECT_LE(difference, 1e-13 * max_abs(baseline)) << "averaged dilatation on " << target;
@@ -549,14 +556,14 @@ TEST(Model, VectorisedForcesEqualTheOnePointDefinitionOnEveryInstructionSet) {
 // gradients (through F and through the test gradients), so they move by about that fraction of the forces' own size
 // (measured 0.35 of it on this cloud), far under what the discretisation resolves. 4 x 2^-24 leaves room for other clouds; any
 // gradient stored wrongly would be orders above it. The difference must not be zero: the precision took effect.
-TEST(Model, SinglePrecisionRowsChangeTheForcesByTheirRoundingOnly) {
+TEST(Discretisation, SinglePrecisionRowsChangeTheForcesByTheirRoundingOnly) {
   for (const bool nodal_average : {false, true}) {
     const auto exact = make_model("mmls", 0.3, 5, "ogden", true, nodal_average);
     const auto single = make_model("mmls", 0.3, 5, "ogden", true, nodal_average, RowPrecision::single_precision);
-    const auto u = random_field(exact->node_count(), 3e-4, 9);
+    const auto u = random_field(exact->discretisation.node_count(), 3e-4, 9);
     std::vector<double> a(u.size()), b(u.size());
-    ASSERT_EQ(exact->internal_forces(u, a), -1);
-    ASSERT_EQ(single->internal_forces(u, b), -1);
+    ASSERT_EQ(exact->kernel.internal_forces(u, a), -1);
+    ASSERT_EQ(single->kernel.internal_forces(u, b), -1);
     double difference = 0.0;
     for (std::size_t i = 0; i < u.size(); ++i) difference = std::max(difference, std::abs(a[i] - b[i]));
     std::cout << "nodal_average " << nodal_average << ": single against double, max difference / max force "
@@ -566,20 +573,21 @@ TEST(Model, SinglePrecisionRowsChangeTheForcesByTheirRoundingOnly) {
   }
 }
 
-TEST(Model, InvertedMaterialIsReportedNotHidden) {
+TEST(Discretisation, InvertedMaterialIsReportedNotHidden) {
   const auto model = make_model();
-  std::vector<double> u(3 * static_cast<std::size_t>(model->node_count()));
-  for (Index i = 0; i < model->node_count(); ++i) u[3 * i + 2] = -2.0 * model->nodes()[i][2];  // F_zz = -1
+  std::vector<double> u(3 * static_cast<std::size_t>(model->discretisation.node_count()));
+  for (Index i = 0; i < model->discretisation.node_count(); ++i)
+    u[3 * i + 2] = -2.0 * model->discretisation.nodes()[i][2];  // F_zz = -1
   std::vector<double> f(u.size());
-  EXPECT_EQ(model->internal_forces(u, f), 0);  // the first integration point, whatever the thread count
+  EXPECT_EQ(model->kernel.internal_forces(u, f), 0);  // the first integration point, whatever the thread count
 }
 
-TEST(Model, StableTimeStepScalesWithNodeSpacing) {
+TEST(Discretisation, StableTimeStepScalesWithNodeSpacing) {
   // dt = 2 / (c sqrt(n sum |grad N|^2)) ~ h / c: halving the spacing halves the step.
   const auto coarse = make_model("mls", 0.0, 4);
   const auto fine = make_model("mls", 0.0, 8);
-  const auto min_of = [](const Model& m) {
-    const auto& dt = m.ip_critical_time_steps();
+  const auto min_of = [](const test::Discretised& m) {
+    const auto& dt = m.discretisation.points().critical_time_steps;
     return *std::min_element(dt.begin(), dt.end());
   };
   const double ratio = min_of(*coarse) / min_of(*fine);
@@ -589,22 +597,22 @@ TEST(Model, StableTimeStepScalesWithNodeSpacing) {
   EXPECT_LT(min_of(*coarse), 0.01 / 4 / c);
 }
 
-// ip_stiffening against an independent computation: under an affine field (reproduced exactly by the shape functions)
+// stiffening() against an independent computation: under an affine field (reproduced exactly by the shape functions)
 // every point has the same F0, and its stiffening is the largest eigenvalue of the Hessian of the strain energy
 // d2W/dF2 at F0 over that at F = I, here by central second differences of W (the model's from forward differences of
 // the stress, by power iteration). Those forward differences (step 1e-6) are off by about 1e-6 of the eigenvalue (3e-7
 // measured), the energy's second differences by about 1e-8: 1e-5 allows for both.
-TEST(Model, StiffeningIsTheLargestTangentModulusOverItsValueAtRest) {
+TEST(Discretisation, StiffeningIsTheLargestTangentModulusOverItsValueAtRest) {
   for (const std::string law : {"neo_hookean", "ogden"}) {
     const auto model = make_model("mls", 0.25, 4, law);
     Mat3 F0;
     F0 << 1.0, 1.0, 0.0, 0.0, 1.05, 0.1, 0.0, 0.0, 0.98;  // a shear of 1 and a small volume change
-    std::vector<double> u(3 * static_cast<std::size_t>(model->node_count()));
-    for (Index i = 0; i < model->node_count(); ++i) {
-      const Vec3 x = (F0 - Mat3::Identity()) * model->nodes()[i];
+    std::vector<double> u(3 * static_cast<std::size_t>(model->discretisation.node_count()));
+    for (Index i = 0; i < model->discretisation.node_count(); ++i) {
+      const Vec3 x = (F0 - Mat3::Identity()) * model->discretisation.nodes()[i];
       for (int c = 0; c < 3; ++c) u[3 * static_cast<std::size_t>(i) + c] = x[c];
     }
-    const Material& material = model->ip_material(0);
+    const Material& material = model->discretisation.material(0);
     auto largest_hessian_eigenvalue = [&](const Mat3& F) {
       constexpr double kDelta = 1e-4;
       Eigen::Matrix<double, 9, 9> hessian;
@@ -623,11 +631,11 @@ TEST(Model, StiffeningIsTheLargestTangentModulusOverItsValueAtRest) {
     };
     const double expected = largest_hessian_eigenvalue(F0) / largest_hessian_eigenvalue(Mat3::Identity());
     EXPECT_GT(expected, 1.2) << law;  // a deformation that stiffens the law measurably
-    const std::vector<double> stiffening = model->ip_stiffening(u);
-    ASSERT_EQ(stiffening.size(), static_cast<std::size_t>(model->integration_point_count()));
-    for (std::size_t ip = 0; ip < stiffening.size(); ++ip)
-      ASSERT_NEAR(stiffening[ip], expected, 1e-5 * expected) << law << " point " << ip;
-    const std::vector<double> at_rest = model->ip_stiffening(std::vector<double>(u.size(), 0.0));
+    const std::vector<double> ratio = mtled::stiffening(model->discretisation, u);
+    ASSERT_EQ(ratio.size(), static_cast<std::size_t>(model->discretisation.points().count()));
+    for (std::size_t ip = 0; ip < ratio.size(); ++ip)
+      ASSERT_NEAR(ratio[ip], expected, 1e-5 * expected) << law << " point " << ip;
+    const std::vector<double> at_rest = mtled::stiffening(model->discretisation, std::vector<double>(u.size(), 0.0));
     for (double s : at_rest) ASSERT_EQ(s, 1.0) << law;
   }
 }
@@ -638,27 +646,27 @@ class ConstraintsTest : public ::testing::TestWithParam<std::string> {};
 // components: "all" with "some" gives x and y one block (the rows of "all") and z another; "all" alone, one of three.
 TEST_P(ConstraintsTest, InterpolatedDisplacementEqualsThePrescribedOneToRoundOff) {
   const auto model = make_model(GetParam(), 0.3, 5);
-  const auto start = random_field(model->node_count(), 1e-3, 5);
-  const auto mass = model->lumped_mass();
+  const auto start = random_field(model->discretisation.node_count(), 1e-3, 5);
+  const auto mass = model->discretisation.lumped_mass();
   NodalConstraints all, some;
   all.name = "all";
   some.name = "some";
   some.set_components({false, false, true});
   std::mt19937 random(9);
   std::uniform_real_distribution<double> uniform(-1e-3, 1e-3);
-  for (Index i = 0; i < model->node_count(); i += 5) {
+  for (Index i = 0; i < model->discretisation.node_count(); i += 5) {
     NodalConstraints& set = (i % 2 == 0) ? all : some;
     set.add_node(i, Vec3(uniform(random), uniform(random), uniform(random)));
   }
   for (const std::vector<NodalConstraints*>& sets : {std::vector{&all, &some}, std::vector{&all}}) {
-    ConstraintSystem constraints(*model);
+    ConstraintSystem constraints(model->discretisation);
     constraints.update(sets, mass, true);
     test::for_each_simd_target([&](const std::string& target) {
       auto u = start;
       constraints.enforce(u, 1.0);
       for (const NodalConstraints* set : sets) {
         for (std::size_t k = 0; k < set->size(); ++k) {
-          const Vec3 v = model->interpolate_node(set->nodes()[k], u);
+          const Vec3 v = model->discretisation.interpolate_node(set->nodes()[k], u);
           for (int c = 0; c < 3; ++c) {
             if (!set->components()[c]) continue;
             EXPECT_NEAR(v[c], set->values[k][c], 1e-15) << set->name << " node " << set->nodes()[k] << " on " << target;
@@ -680,36 +688,37 @@ TEST_P(ConstraintsTest, InterpolatedDisplacementEqualsThePrescribedOneToRoundOff
 // projection equals, to the last bits, that of a system built afresh; a set that couples the parts joins them.
 TEST_P(ConstraintsTest, AChangedSetRefactorisesOnlyItsOwnPart) {
   const auto model = make_model(GetParam(), 0.3, 8);
-  const auto mass = model->lumped_mass();
+  const auto mass = model->discretisation.lumped_mass();
   NodalConstraints bottom, top;
   bottom.name = "bottom";
   top.name = "top";
   std::vector<Index> upper;
-  for (Index i = 0; i < model->node_count(); ++i) {
-    if (model->nodes()[i][2] < 1e-9) bottom.add_node(i, Vec3::Zero());
-    if (model->nodes()[i][2] > 0.01 - 1e-9) upper.push_back(i);
+  for (Index i = 0; i < model->discretisation.node_count(); ++i) {
+    if (model->discretisation.nodes()[i][2] < 1e-9) bottom.add_node(i, Vec3::Zero());
+    if (model->discretisation.nodes()[i][2] > 0.01 - 1e-9) upper.push_back(i);
   }
   ASSERT_GE(upper.size(), 4u);
   for (std::size_t k = 0; k < 2; ++k) top.add_node(upper[k], Vec3(1e-4, 0.0, -2e-4));
-  ConstraintSystem constraints(*model);
+  ConstraintSystem constraints(model->discretisation);
   constraints.update({&bottom, &top}, mass, true);
   ASSERT_EQ(constraints.parts(), 2u) << "the bottom and top sets were meant to be uncoupled";
   ASSERT_EQ(constraints.parts_factorised(), 2);
 
   const auto projected = [&](ConstraintSystem& system) {
-    auto u = random_field(model->node_count(), 1e-3, 11);
+    auto u = random_field(model->discretisation.node_count(), 1e-3, 11);
     system.enforce(u, 1.0);
     return u;
   };
   const auto expect_same_as_afresh = [&](const std::vector<double>& u) {
-    ConstraintSystem afresh(*model);
+    ConstraintSystem afresh(model->discretisation);
     afresh.update({&bottom, &top}, mass, true);
     const auto reference = projected(afresh);
     for (std::size_t i = 0; i < u.size(); ++i) ASSERT_EQ(u[i], reference[i]) << "unknown " << i;
     for (const NodalConstraints* set : {&bottom, &top})
       for (std::size_t k = 0; k < set->size(); ++k)
         for (int c = 0; c < 3; ++c)
-          EXPECT_NEAR(model->interpolate_node(set->nodes()[k], u)[c], set->values[k][c], 1e-15) << set->name;
+          EXPECT_NEAR(model->discretisation.interpolate_node(set->nodes()[k], u)[c], set->values[k][c], 1e-15)
+              << set->name;
   };
   top.add_node(upper[2], Vec3(0.0, 1e-4, -2e-4));
   constraints.update({&bottom, &top}, mass, false);
@@ -717,10 +726,10 @@ TEST_P(ConstraintsTest, AChangedSetRefactorisesOnlyItsOwnPart) {
   expect_same_as_afresh(projected(constraints));
 
   // A column of nodes from the bottom face to the top one couples the two: one part, factorised.
-  for (Index i = 0; i < model->node_count(); ++i)
-    if (std::abs(model->nodes()[i][0] - model->nodes()[upper[0]][0]) < 1e-3 &&
-        std::abs(model->nodes()[i][1] - model->nodes()[upper[0]][1]) < 1e-3 && model->nodes()[i][2] > 1e-9 &&
-        model->nodes()[i][2] < 0.01 - 1e-9)
+  for (Index i = 0; i < model->discretisation.node_count(); ++i)
+    if (std::abs(model->discretisation.nodes()[i][0] - model->discretisation.nodes()[upper[0]][0]) < 1e-3 &&
+        std::abs(model->discretisation.nodes()[i][1] - model->discretisation.nodes()[upper[0]][1]) < 1e-3 &&
+        model->discretisation.nodes()[i][2] > 1e-9 && model->discretisation.nodes()[i][2] < 0.01 - 1e-9)
       top.add_node(i, Vec3(0.0, 0.0, -1e-4));
   constraints.update({&bottom, &top}, mass, false);
   EXPECT_EQ(constraints.parts(), 1u);

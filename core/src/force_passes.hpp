@@ -1,6 +1,6 @@
 #pragma once
-// The internal-force kernel's vectorised parts (force_kernel.cpp), written once with Google Highway and
-// dispatched at run time to the best instruction set the CPU has. Model::internal_forces runs them over
+// The internal-force kernel's vectorised parts (force_passes.cpp), written once with Google Highway and
+// dispatched at run time to the best instruction set the CPU has. ForceKernel::internal_forces runs them over
 // batches of consecutive integration points with the same material:
 //   gather:        F = I + sum_I u_I (x) grad N_I          (one SIMD lane per support entry)
 //   the material:  S(F) for the batch                      (Material::stress_batch, one lane per point)
@@ -13,7 +13,7 @@
 #include "mtled/gradient_rows.hpp"
 #include "mtled/interfaces/material.hpp"
 
-namespace mtled::force_kernel {
+namespace mtled::force_passes {
 
 // batch.F for integration points first .. first + batch.count - 1; gather and scatter ask the caches for the rows'
 // lines a few kilobytes ahead as they read them (the next points' rows lie next in memory).
@@ -26,4 +26,4 @@ void first_piola(const StressBatch& batch, const double* weights, double (&P)[9]
 void scatter(const GradientRows& rows, const double* xi4, const double* m3, Index first, int count,
              const double (&P)[9][StressBatch::kCapacity], const bool* skip, double* f4);
 
-}  // namespace mtled::force_kernel
+}  // namespace mtled::force_passes
