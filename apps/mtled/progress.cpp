@@ -44,17 +44,17 @@ namespace mtled::app {
 void ProgressWriter::after_step(const StepRecord& step) {
   if (interrupted_) throw Interrupted();
   if (!progress_.due()) return;
-  std::string text = fmt::format("step {}  t {:.4g} s", step.step, step.time);
+  std::string text = fmt::format("step {}  t {:.4g} s", step.load.step, step.load.time);
   if (step.needle)
     text += fmt::format("  depth {:.2f} mm  force {:.4g} N  {}", 1e3 * step.needle->depth, step.needle->force,
                         to_string(step.needle->phase));
   // Once the load is on, a relaxation is most of a run: show how far it still has to go.
-  if (step.load_fraction >= 1.0) {
-    if (const auto relaxation = step.integrator->report().relaxation)
+  if (step.load.load_fraction >= 1.0) {
+    if (const auto relaxation = run_->integrator->report().relaxation)
       text += fmt::format("  relaxing: error {:.2g} (tolerance {:.2g})", relaxation->relative_error_bound,
                           relaxation->tolerance);
   }
-  progress_.draw(step.load_fraction, text);
+  progress_.draw(step.load.load_fraction, text);
 }
 
 }  // namespace mtled::app

@@ -34,12 +34,16 @@ class ProgressWriter final : public OutputWriter {
  public:
   ProgressWriter(bool enabled, const std::atomic<bool>& interrupted) : progress_(enabled), interrupted_(interrupted) {}
   std::string name() const override { return "progress"; }
-  void before_run(const StepRecord& initial) override { after_step(initial); }
+  void before_run(const RunContext& run, const StepRecord& initial) override {
+    run_ = &run;
+    after_step(initial);
+  }
   void after_step(const StepRecord& step) override;
   bool reads_displacement(long) const override { return false; }
 
  private:
   void complete(const StepRecord&) override { progress_.finish(); }
+  const RunContext* run_ = nullptr;
   Progress progress_;
   const std::atomic<bool>& interrupted_;
 };

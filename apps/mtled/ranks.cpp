@@ -75,8 +75,9 @@ class InjectedFailure final : public StepMonitor {
   explicit InjectedFailure(long step) : step_(step) {}
   std::string name() const override { return "injected_failure"; }
   void after_step(const StepRecord& step) override {
-    if (step.step >= step_)
-      throw std::runtime_error("failure injected at step " + std::to_string(step.step) + " (MTLED_TEST_FAIL_RANK)");
+    if (step.load.step >= step_)
+      throw std::runtime_error("failure injected at step " + std::to_string(step.load.step) +
+                               " (MTLED_TEST_FAIL_RANK)");
   }
   bool reads_displacement(long) const override { return false; }
 

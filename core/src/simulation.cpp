@@ -331,32 +331,38 @@ void Simulation::complete_step(std::span<double> u_new, double new_time, double 
 
 StepRecord Simulation::last_step() const {
   StepRecord r;
-  r.step = load_.step;
-  r.time = load_.time;
+  r.load = load_;
   r.step_size = step_size_;
-  r.previous_step_size = previous_step_size_;
-  r.load_fraction = load_.load_fraction;
   r.steady_states = steady_states_;
   if (displacement_whole_) r.u = displacement();
   r.mass = mass_;
   r.sums = sums_;
-  r.discretisation = discretisation_.get();
-  r.integrator = integrator_.get();
-  r.internal_forces = [engine = engine_.get()](std::span<const double> u, std::span<double> f) {
-    return engine->internal_forces(u, f);
-  };
-  r.project_out = [constraints = constraint_system_.get()](std::span<double> v) { constraints->project_out(v); };
-  r.for_each_share = [team = &discretisation_->team()](std::int64_t n, const auto& body) {
-    team->for_each_share(n, body);
-  };
-  r.constraint_sets = constraint_sets_read_only_;
+  if (step_size_ > 0.0 && previous_step_size_ > 0.0)
+    r.kinetic_energy = std::abs(0.5 / (step_size_ * previous_step_size_) * sums_.kinetic_product);
   r.previous_values = previous_values_;
-  r.external_forces = !force_sets_.empty();
   if (needle_) r.needle = needle_->status();
   r.stable_time_step = stable_time_step_;
-  r.time_step_factor = time_step_factor_;
-  r.stable_step_margin = stable_step_margin_;
   return r;
+}
+
+RunContext Simulation::run_context() {
+  RunContext c;
+  c.discretisation = discretisation_.get();
+  c.integrator = integrator_.get();
+  c.constraint_sets = constraint_sets_read_only_;
+  c.external_forces = !force_sets_.empty();
+  const IntegratorReport report = integrator_->report();
+  c.time_step_factor = report.time_step_factor;
+  c.stable_step_margin = report.stable_step_margin;
+  c.internal_forces = [engine = engine_.get()](std::span<const double> u, std::span<double> f) {
+    return engine->internal_forces(u, f);
+  };
+  c.project_out = [constraints = constraint_system_.get()](std::span<double> v) { constraints->project_out(v); };
+  c.for_each_share = [team = &discretisation_->team()](std::int64_t n, const auto& body) {
+    team->for_each_share(n, body);
+  };
+  c.step_control = this;
+  return c;
 }
 
 void Simulation::add_monitor(std::shared_ptr<StepMonitor> monitor) { monitors_.push_back(std::move(monitor)); }
@@ -370,15 +376,13 @@ json Simulation::monitor_reports() const {
 
 void Simulation::run() {
   integrator_->initialise(*this);
-  time_step_factor_ = integrator_->report().time_step_factor;
-  stable_step_margin_ = integrator_->report().stable_step_margin;
+  run_context_ = run_context();
   const StepRecord initial = last_step();
-  for (const auto& monitor : monitors_) monitor->before_run(initial);
+  for (const auto& monitor : monitors_) monitor->before_run(run_context_, initial);
   try {
     while (!integrator_->finished(*this)) {
       integrator_->step(*this);
-      StepRecord step = last_step();
-      step.control = this;
+      const StepRecord step = last_step();
       for (const auto& monitor : monitors_) monitor->after_step(step);
     }
   } catch (const InstabilityError&) {

@@ -88,13 +88,14 @@ namespace {
 
 void needle_row(const StepRecord& step, OutputFolder::Stream& stream) {
   const NeedleStatus& s = *step.needle;
-  stream.out() << fmt::format("{:.10g},{:.10g},{:.10g},{}\n", step.time, s.depth, s.force, to_string(s.phase));
+  stream.out() << fmt::format("{:.10g},{:.10g},{:.10g},{}\n", step.load.time, s.depth, s.force, to_string(s.phase));
 }
 
-void reaction_rows(const StepRecord& step, OutputFolder::Stream& stream) {
-  for (const NodalConstraints* set : step.constraint_sets) {
+void reaction_rows(const StepRecord& step, std::span<const NodalConstraints* const> sets,
+                   OutputFolder::Stream& stream) {
+  for (const NodalConstraints* set : sets) {
     const Vec3 r = set->total_reaction();
-    stream.out() << fmt::format("{:.10g},{},{:.10g},{:.10g},{:.10g}\n", step.time, set->name, r[0], r[1], r[2]);
+    stream.out() << fmt::format("{:.10g},{},{:.10g},{:.10g},{:.10g}\n", step.load.time, set->name, r[0], r[1], r[2]);
   }
 }
 
@@ -103,8 +104,9 @@ void reaction_rows(const StepRecord& step, OutputFolder::Stream& stream) {
 HistoryWriter::HistoryWriter(const OutputFolder& folder, const Parameters& output)
     : folder_(folder), every_(output.integer("history_every_steps")) {}
 
-void HistoryWriter::before_run(const StepRecord& initial) {
-  relaxing_ = initial.integrator->report().relaxation.has_value();
+void HistoryWriter::before_run(const RunContext& run, const StepRecord& initial) {
+  constraint_sets_ = run.constraint_sets;
+  relaxing_ = run.integrator->report().relaxation.has_value();
   if (initial.needle) {
     needle_ = folder_.open_stream("needle.csv");
     needle_.out() << "time_s,depth_m,force_N,phase\n";
@@ -113,7 +115,7 @@ void HistoryWriter::before_run(const StepRecord& initial) {
       needle_transient_.out() << "time_s,depth_m,transient_force_N,phase\n";
     }
   }
-  if (!initial.constraint_sets.empty()) {
+  if (!constraint_sets_.empty()) {
     reactions_ = folder_.open_stream("reactions.csv");
     reactions_.out() << "time_s,set,fx_N,fy_N,fz_N\n";
     if (relaxing_) {
@@ -125,12 +127,12 @@ void HistoryWriter::before_run(const StepRecord& initial) {
 }
 
 void HistoryWriter::after_step(const StepRecord& step) {
-  if (step.step % every_ == 0) record(step);
+  if (step.load.step % every_ == 0) record(step);
   if (relaxing_) record_equilibrium(step);
 }
 
 void HistoryWriter::complete(const StepRecord& last) {
-  if (last_recorded_ != last.step) record(last);
+  if (last_recorded_ != last.load.step) record(last);
   needle_.commit();
   needle_transient_.commit();
   reactions_.commit();
@@ -138,9 +140,9 @@ void HistoryWriter::complete(const StepRecord& last) {
 }
 
 void HistoryWriter::record(const StepRecord& step) {
-  last_recorded_ = step.step;
+  last_recorded_ = step.load.step;
   if (needle_.is_open()) needle_row(step, relaxing_ ? needle_transient_ : needle_);
-  if (reactions_.is_open()) reaction_rows(step, relaxing_ ? reactions_transient_ : reactions_);
+  if (reactions_.is_open()) reaction_rows(step, constraint_sets_, relaxing_ ? reactions_transient_ : reactions_);
 }
 
 // needle.csv and reactions.csv rows at each state the relaxation reports steady.
@@ -148,7 +150,7 @@ void HistoryWriter::record_equilibrium(const StepRecord& step) {
   if (step.steady_states == steady_states_) return;
   steady_states_ = step.steady_states;
   if (needle_.is_open()) needle_row(step, needle_);
-  if (reactions_.is_open()) reaction_rows(step, reactions_);
+  if (reactions_.is_open()) reaction_rows(step, constraint_sets_, reactions_);
 }
 
 // ---- snapshots
@@ -160,15 +162,16 @@ SnapshotWriter::SnapshotWriter(const OutputFolder& folder, const Parameters& out
       style_(vtu_style(output)),
       cell_data_(output.string_list("cell_data")) {}
 
-void SnapshotWriter::before_run(const StepRecord& initial) { snapshot(initial); }  // the series starts with it
+// The series starts with the initial state.
+void SnapshotWriter::before_run(const RunContext&, const StepRecord& initial) { snapshot(initial); }
 
 void SnapshotWriter::after_step(const StepRecord& step) {
-  if (reads_displacement(step.step)) snapshot(step);
+  if (reads_displacement(step.load.step)) snapshot(step);
 }
 
 // ... and ends with the final state, which the run's last step need not be a multiple of every_steps to reach.
 void SnapshotWriter::complete(const StepRecord& last) {
-  if (last_snapshot_ != last.step) snapshot(last);
+  if (last_snapshot_ != last.load.step) snapshot(last);
   folder_.write_file("series.pvd", [&](std::ostream& out) {
     out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
     for (const auto& [time, file] : snapshots_)
@@ -178,13 +181,14 @@ void SnapshotWriter::complete(const StepRecord& last) {
 }
 
 void SnapshotWriter::snapshot(const StepRecord& step) {
-  const std::string file = fmt::format("steps/{:06d}.vtu", step.step);
+  const std::string file = fmt::format("steps/{:06d}.vtu", step.load.step);
   std::vector<double> u(step.u.size());
-  step.discretisation->interpolate(step.u, u);
+  kernel_.discretisation().interpolate(step.u, u);
   const std::vector<CellField> fields = cell_fields(kernel_, step.u, cell_data_);
-  folder_.write_file(file, [&](std::ostream& out) { write_vtu(out, step.discretisation->mesh(), u, fields, style_); });
-  snapshots_.emplace_back(step.time, file);
-  last_snapshot_ = step.step;
+  folder_.write_file(file,
+                     [&](std::ostream& out) { write_vtu(out, kernel_.discretisation().mesh(), u, fields, style_); });
+  snapshots_.emplace_back(step.load.time, file);
+  last_snapshot_ = step.load.step;
 }
 
 std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulation, const Scene& scene,

@@ -15,7 +15,7 @@ constexpr double kMargin = 10.0;
 }  // namespace
 
 void EnergyMonitor::after_step(const StepRecord& step) {
-  const auto& sets = step.constraint_sets;
+  const auto& sets = run_->constraint_sets;
   const auto& previous_values = step.previous_values;
   for (std::size_t s = 0; s < sets.size(); ++s) {
     const NodalConstraints& set = *sets[s];
@@ -33,17 +33,17 @@ void EnergyMonitor::after_step(const StepRecord& step) {
   // time-step factors.) For a mode that grows, it grows too (in magnitude). The step engine sums both where the
   // state lives.
   if (!(step.step_size > 0.0)) return;
-  const Discretisation& model = *step.discretisation;
+  const Discretisation& model = *run_->discretisation;
   const double added = step.sums.projection_energy;
   const Index fastest = step.sums.fastest_node;
   work_bound_ += 0.5 * added / (step.step_size * step.step_size);
-  kinetic_energy_ = step.kinetic_energy();
+  kinetic_energy_ = step.kinetic_energy;
   // External force drivers would need their own work; none of the shipped plugins has one.
-  if (step.external_forces || !(step.previous_step_size > 0.0)) return;
+  if (run_->external_forces) return;
   if (work_bound_ > 0.0) largest_ratio_ = std::max(largest_ratio_, kinetic_energy_ / work_bound_);
   if (!(kinetic_energy_ > kMargin * work_bound_) || kinetic_energy_ <= 0.0) return;
   throw node_instability(
-      step.step, step.time, "energy_growth",
+      step.load.step, step.load.time, "energy_growth",
       fmt::format("kinetic energy {:.4g} J exceeds {:g} times the work the loads have put in ({:.4g} J): the solution "
                   "is growing without bound (the fastest node is {} at {} m); reduce the time-step factor",
                   kinetic_energy_, kMargin, work_bound_, fastest, point_text(model.nodes()[fastest])),

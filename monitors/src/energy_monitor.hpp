@@ -9,11 +9,13 @@ namespace mtled {
 class EnergyMonitor final : public StepMonitor {
  public:
   std::string name() const override { return "energy"; }
+  void before_run(const RunContext& run, const StepRecord&) override { run_ = &run; }
   void after_step(const StepRecord& step) override;
   bool reads_displacement(long) const override { return false; }
   json report() const override;
 
  private:
+  const RunContext* run_ = nullptr;
   double work_bound_ = 0.0;  // J: sum of |reaction . increment of the prescribed value| and of the kinetic
                              // energy the constraint projection added
   double kinetic_energy_ = 0.0;  // at the last step (StepRecord::kinetic_energy)

@@ -65,7 +65,7 @@ constexpr double kSliverRadiusRatio = 0.1;
 }  // namespace
 
 void InversionMonitor::check(const StepRecord& step) {
-  const Discretisation& model = *step.discretisation;
+  const Discretisation& model = *run_->discretisation;
   if (sliver_.empty()) {
     sliver_.resize(static_cast<std::size_t>(model.mesh().tet_count()));
     for (Index t = 0; t < model.mesh().tet_count(); ++t)
@@ -101,10 +101,10 @@ void InversionMonitor::check(const StepRecord& step) {
     inverted += ratio <= 0.0;
   }
   ++checks_;
-  last_checked_ = step.step;
+  last_checked_ = step.load.step;
   cut_tets_ = std::max(cut_tets_, cut);
   slivers_inverted_ = std::max(slivers_inverted_, slivers);
-  if (smallest < smallest_ratio_) smallest_ratio_ = smallest, smallest_at_ = step.step;
+  if (smallest < smallest_ratio_) smallest_ratio_ = smallest, smallest_at_ = step.load.step;
   if (smallest > 0.0) return;
   // Name the vertex that moved farthest: the node a driver pushed through its neighbours.
   Index node = mesh.tets[worst][0];
@@ -113,7 +113,7 @@ void InversionMonitor::check(const StepRecord& step) {
   const bool first = inverted_tets_ == 0;
   inverted_tets_ = std::max(inverted_tets_, inverted);
   if (first) {
-    first_inverted_at_ = step.step;
+    first_inverted_at_ = step.load.step;
     first_node_ = node;
     first_position_ = mesh.points[node];
   }
@@ -123,7 +123,7 @@ void InversionMonitor::check(const StepRecord& step) {
         "step {}: {} background tets turned inside out away from the needle (the worst {:.3g} times its "
         "volume, around node {} at {} m): material folded between integration points; /monitors/inversion "
         "= \"stop\" ends such runs",
-        step.step, inverted, smallest, node, point_text(mesh.points[node]));
+        step.load.step, inverted, smallest, node, point_text(mesh.points[node]));
 }
 
 std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, double radial,
@@ -162,7 +162,7 @@ std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, dou
 }
 
 void InversionMonitor::stop(const StepRecord& step, Index worst, double smallest, Index node, Vec3 moved_by) const {
-  const Discretisation& model = *step.discretisation;
+  const Discretisation& model = *run_->discretisation;
   const TetMesh& mesh = model.mesh();
   const NeedleStatus* needle = step.needle && step.needle->depth > 0.0 ? &*step.needle : nullptr;
   if (folded_) {  // last_good_state.vtu's "folded": the tets this check found turned over
@@ -175,7 +175,7 @@ void InversionMonitor::stop(const StepRecord& step, Index worst, double smallest
   }
   // A vertex of the folded tet in a set a boundary condition drives (not the needle's): that condition pushes it.
   const NodalConstraints* boundary = nullptr;
-  for (const NodalConstraints* set : step.constraint_sets)
+  for (const NodalConstraints* set : run_->constraint_sets)
     if (set->name != "needle" && set->name != "needle_shaft")
       for (const Index v : mesh.tets[worst])
         if (std::find(set->nodes().begin(), set->nodes().end(), v) != set->nodes().end()) boundary = set;
@@ -191,7 +191,7 @@ void InversionMonitor::stop(const StepRecord& step, Index worst, double smallest
         1e3 * needle->depth, 1e3 * radial, 1e3 * axial);
   }
   throw node_instability(
-      step.step, step.time, "inverted_between_points",
+      step.load.step, step.load.time, "inverted_between_points",
       fmt::format("background tet {} is turned inside out by the interpolated displacements{} away from the needle's "
                   "zone (moved volume {:.3g} times its reference volume; node {} moved {:.3g} mm): the material folded "
                   "between integration points. To go on: {}; or set /monitors/inversion to \"warn\" to finish and "

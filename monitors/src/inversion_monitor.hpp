@@ -50,12 +50,13 @@ class InversionMonitor final : public StepMonitor {
   InversionMonitor(long every, bool stop, FoldAdvice advice = {}, std::shared_ptr<FoldedTets> folded = nullptr)
       : every_(every), stop_(stop), advice_(advice), folded_(std::move(folded)) {}
   std::string name() const override { return "inversion"; }
+  void before_run(const RunContext& run, const StepRecord&) override { run_ = &run; }
   void after_step(const StepRecord& step) override {
-    if (reads_displacement(step.step)) check(step);
+    if (reads_displacement(step.load.step)) check(step);
   }
   bool reads_displacement(long step) const override { return step % every_ == 0; }
   void after_run(const StepRecord& last) override {
-    if (last_checked_ != last.step) check(last);
+    if (last_checked_ != last.load.step) check(last);
   }
   json report() const override;
 
@@ -64,6 +65,7 @@ class InversionMonitor final : public StepMonitor {
   // The stop: where the fold is against the needle, how far it went, and the lever that applies.
   [[noreturn]] void stop(const StepRecord& step, Index worst, double smallest, Index node, Vec3 moved_by) const;
 
+  const RunContext* run_ = nullptr;
   long every_;
   bool stop_;
   FoldAdvice advice_;

@@ -80,7 +80,7 @@ double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
   }
   std::vector<double> f0(dofs), f1(dofs), perturbed(dofs), root_mass(dofs);
   for (std::size_t d = 0; d < dofs; ++d) root_mass[d] = std::sqrt(mass[d / 3]);
-  if (step.internal_forces(step.u, f0) >= 0) return 0.0;  // an inadmissible state is the other monitors' business
+  if (run_->internal_forces(step.u, f0) >= 0) return 0.0;  // an inadmissible state is the other monitors' business
   ++force_evaluations_;
 
   // A random start needs more vectors than a warm one to resolve the top of the spectrum.
@@ -89,7 +89,7 @@ double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
   Eigen::VectorXd alpha(size), beta(size);
   Eigen::VectorXd w(static_cast<Eigen::Index>(dofs));
   std::vector<double> increment(mode_);  // a displacement increment, projected into the constrained subspace
-  step.project_out(increment);
+  run_->project_out(increment);
   for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
   if (!(w.norm() > 0.0)) return 0.0;
   q.col(0) = w / w.norm();
@@ -102,15 +102,15 @@ double StableStepMonitor::largest_eigenvalue(const StepRecord& step) {
     for (std::size_t d = 0; d < dofs; ++d)
       perturbed[d] = step.u[d] + epsilon * q(static_cast<Eigen::Index>(d), j) / root_mass[d];
     ++force_evaluations_;
-    if (step.internal_forces(perturbed, f1) >= 0) return 0.0;
+    if (run_->internal_forces(perturbed, f1) >= 0) return 0.0;
     // M^-1 K x, projected, then back to the symmetric form: w = M^1/2 P M^-1 K x.
     for (std::size_t d = 0; d < dofs; ++d) increment[d] = (f1[d] - f0[d]) / (epsilon * mass[d / 3]);
-    step.project_out(increment);
+    run_->project_out(increment);
     for (std::size_t d = 0; d < dofs; ++d) w[static_cast<Eigen::Index>(d)] = root_mass[d] * increment[d];
     alpha[j] = q.col(j).dot(w);
     built = j + 1;
     // Full reorthogonalisation, twice (the forward difference makes A slightly unsymmetric).
-    for (int pass = 0; pass < 2; ++pass) reorthogonalise(q, built, w, step.for_each_share);
+    for (int pass = 0; pass < 2; ++pass) reorthogonalise(q, built, w, run_->for_each_share);
     beta[j] = w.norm();
     if (j + 1 == size || !(beta[j] > 1e-10 * std::abs(alpha[j]))) break;
     q.col(j + 1) = w / beta[j];
@@ -136,19 +136,19 @@ void StableStepMonitor::check(const StepRecord& step) {
   last_stable_step_ = 2.0 / std::sqrt(lambda);
   if (last_stable_step_ < smallest_stable_step_) {
     smallest_stable_step_ = last_stable_step_;
-    smallest_stable_step_at_ = step.step;
+    smallest_stable_step_at_ = step.load.step;
   }
-  log().debug("step {}: stable step re-estimated {:.4g} s (time step {:.4g} s)", step.step, last_stable_step_,
+  log().debug("step {}: stable step re-estimated {:.4g} s (time step {:.4g} s)", step.load.step, last_stable_step_,
               step.step_size);
   if (response_ != Response::stop) {
     // The integrator's own margin (IntegratorReport::stable_step_margin): the estimate lands within a few percent
     // of the true limit on either side (tests/solver), the body may stiffen further until the next check, and
     // central differences lose accuracy well before the limit (docs/stability.md).
-    const double margin = step.stable_step_margin;
-    if (step.control == nullptr) return;
+    const double margin = run_->stable_step_margin;
+    if (run_->step_control == nullptr) return;
     const double target = margin * last_stable_step_;
     if (step.step_size > target) {
-      step.control->set_stable_time_step(target / step.time_step_factor);
+      run_->step_control->set_stable_time_step(target / run_->time_step_factor);
       ++lowered_;
       lowest_step_ = std::min(lowest_step_, target);
       return;
@@ -164,7 +164,7 @@ void StableStepMonitor::check(const StepRecord& step) {
     const double raised = std::min(target, kMostOverSetupBound * setup_estimate_);
     if (!raises_ || !held_ || !(raised > kWorthRaising * step.step_size)) return;
     if (stable_before_raise_ == 0.0) stable_before_raise_ = step.stable_time_step;
-    step.control->set_stable_time_step(raised / step.time_step_factor);
+    run_->step_control->set_stable_time_step(raised / run_->time_step_factor);
     ++raised_;
     highest_step_ = std::max(highest_step_, raised);
     return;
@@ -175,21 +175,21 @@ void StableStepMonitor::check(const StepRecord& step) {
 }
 
 void StableStepMonitor::follow_loads(const StepRecord& step) {
-  const bool held = step.load_fraction == previous_load_fraction_;
-  previous_load_fraction_ = step.load_fraction;
-  if (held && !held_) hold_check_at_ = step.step + 1;  // the displacement is read then (reads_displacement)
+  const bool held = step.load.load_fraction == previous_load_fraction_;
+  previous_load_fraction_ = step.load.load_fraction;
+  if (held && !held_) hold_check_at_ = step.load.step + 1;  // the displacement is read then (reads_displacement)
   if (!held && held_ && stable_before_raise_ > 0.0) {
     // The loads move again: back to the step the ramp had (or the lowered one, if a check lowered it since). One
     // step of the new ramp was taken with the raised step, from the settled state it was estimated for.
-    if (step.control != nullptr)
-      step.control->set_stable_time_step(std::min(step.stable_time_step, stable_before_raise_));
+    if (run_->step_control != nullptr)
+      run_->step_control->set_stable_time_step(std::min(step.stable_time_step, stable_before_raise_));
     stable_before_raise_ = 0.0;
   }
   held_ = held;
 }
 
 void StableStepMonitor::refuse(const StepRecord& step) const {
-  const Discretisation& model = *step.discretisation;
+  const Discretisation& model = *run_->discretisation;
   const double step_size = step.step_size;
   // Where the fastest mode lives: the node with the largest share of it.
   Index where = 0;
@@ -200,13 +200,14 @@ void StableStepMonitor::refuse(const StepRecord& step) const {
       where = static_cast<Index>(d / 3);
     }
   throw node_instability(
-      step.step, step.time, "time_step_above_stable",
+      step.load.step, step.load.time, "time_step_above_stable",
       fmt::format("the time step {:.4g} s exceeds the stable step of the current state, {:.4g} s = "
                   "2 / sqrt(lambda_max(M^-1 K)) re-estimated at step {} ({:.3g} times the setup estimate {:.4g} s); "
                   "its fastest mode is largest at node {} at {} m; reduce /integrator/time_step_factor to {:.2g} or "
                   "less",
-                  step_size, last_stable_step_, step.step, last_stable_step_ / step.stable_time_step, step.stable_time_step,
-                  where, point_text(model.nodes()[where]), 0.9 * last_stable_step_ / step_size * step.time_step_factor),
+                  step_size, last_stable_step_, step.load.step, last_stable_step_ / step.stable_time_step,
+                  step.stable_time_step, where, point_text(model.nodes()[where]),
+                  0.9 * last_stable_step_ / step_size * run_->time_step_factor),
       model, where);
 }
 

@@ -28,13 +28,14 @@ class StableStepMonitor final : public StepMonitor {
   std::string name() const override { return "stable_step"; }
   // "follow" raises only a steady-state integrator's step (IntegratorReport::relaxation): its time is fictitious.
   // For any other it acts as "adapt".
-  void before_run(const StepRecord& initial) override {
-    raises_ = response_ == Response::follow && initial.integrator != nullptr &&
-              initial.integrator->report().relaxation.has_value();
+  void before_run(const RunContext& run, const StepRecord&) override {
+    run_ = &run;
+    raises_ =
+        response_ == Response::follow && run.integrator != nullptr && run.integrator->report().relaxation.has_value();
   }
   void after_step(const StepRecord& step) override {
     if (raises_) follow_loads(step);
-    if (reads_displacement(step.step)) check(step);
+    if (reads_displacement(step.load.step)) check(step);
   }
   bool reads_displacement(long step) const override {
     return step == 1 || step % every_ == 0 || step == hold_check_at_;
@@ -51,6 +52,7 @@ class StableStepMonitor final : public StepMonitor {
   // Throws the InstabilityError "time_step_above_stable", naming where the fastest mode is largest.
   [[noreturn]] void refuse(const StepRecord& step) const;
 
+  const RunContext* run_ = nullptr;
   long every_;
   int iterations_;
   double perturbation_length_;

@@ -328,8 +328,8 @@ class StepSizes final : public StepMonitor {
   std::string name() const override { return "step_sizes"; }
   bool reads_displacement(long) const override { return false; }
   void after_step(const StepRecord& step) override {
-    entries.push_back({step.step_size, step.load_fraction == previous_});
-    previous_ = step.load_fraction;
+    entries.push_back({step.step_size, step.load.load_fraction == previous_});
+    previous_ = step.load.load_fraction;
   }
   std::vector<Entry> entries;
 

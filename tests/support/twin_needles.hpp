@@ -23,20 +23,21 @@ class TwinNeedles final : public StepMonitor {
   // Three needles made alike: the one given the whole u first.
   explicit TwinNeedles(std::vector<std::shared_ptr<NeedleModel>> needles) : needles_(std::move(needles)) {}
   std::string name() const override { return "twin_needles"; }
+  void before_run(const RunContext& run, const StepRecord&) override { run_ = &run; }
   void after_step(const StepRecord& step) override {
     ASSERT_EQ(needles_.size(), 3u);
-    const LoadState load{step.time, step.load_fraction, step.step};
+    const LoadState& load = step.load;
     std::vector<Index> nodes;
-    ASSERT_TRUE(needles_[1]->nodes_read(load, *step.discretisation, nodes));
+    ASSERT_TRUE(needles_[1]->nodes_read(load, *run_->discretisation, nodes));
     std::vector<double> not_a_number(step.u.size(), std::numeric_limits<double>::quiet_NaN()), shifted(step.u.size());
     for (std::size_t i = 0; i < shifted.size(); ++i)  // by node and component, so that no gradient is left alone
       shifted[i] = step.u[i] + 1e-6 * static_cast<double>(i % 7);
     for (const Index n : nodes)
       for (std::size_t d = 3 * static_cast<std::size_t>(n); d < 3 * static_cast<std::size_t>(n) + 3; ++d)
         not_a_number[d] = shifted[d] = step.u[d];
-    needles_[0]->update(load, *step.discretisation, step.u);
-    needles_[1]->update(load, *step.discretisation, not_a_number);
-    needles_[2]->update(load, *step.discretisation, shifted);
+    needles_[0]->update(load, *run_->discretisation, step.u);
+    needles_[1]->update(load, *run_->discretisation, not_a_number);
+    needles_[2]->update(load, *run_->discretisation, shifted);
     std::sort(nodes.begin(), nodes.end());
     largest_read = std::max(largest_read, static_cast<std::size_t>(std::unique(nodes.begin(), nodes.end()) - nodes.begin()));
     const auto a = needles_[0]->constraints();
@@ -44,11 +45,11 @@ class TwinNeedles final : public StepMonitor {
       const auto b = needles_[twin]->constraints();
       ASSERT_EQ(a.size(), b.size());
       for (std::size_t s = 0; s < a.size(); ++s) {
-        ASSERT_EQ(a[s]->nodes(), b[s]->nodes()) << "step " << step.step << ", twin " << twin;
-        ASSERT_EQ(a[s]->points().size(), b[s]->points().size()) << "step " << step.step << ", twin " << twin;
+        ASSERT_EQ(a[s]->nodes(), b[s]->nodes()) << "step " << step.load.step << ", twin " << twin;
+        ASSERT_EQ(a[s]->points().size(), b[s]->points().size()) << "step " << step.load.step << ", twin " << twin;
         for (std::size_t k = 0; k < a[s]->values.size(); ++k)
           ASSERT_EQ(a[s]->values[k], b[s]->values[k])
-              << "step " << step.step << ", twin " << twin << ", set " << a[s]->name << ", entry " << k;
+              << "step " << step.load.step << ", twin " << twin << ", set " << a[s]->name << ", entry " << k;
       }
     }
     punctured = needles_[0]->status().phase == NeedlePhase::penetration;
@@ -59,6 +60,7 @@ class TwinNeedles final : public StepMonitor {
   Index driven = 0;
 
  private:
+  const RunContext* run_ = nullptr;
   std::vector<std::shared_ptr<NeedleModel>> needles_;
 };
 

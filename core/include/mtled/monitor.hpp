@@ -35,20 +35,17 @@ class StepControl {
   virtual void set_stable_time_step(double stable_time_step) = 0;
 };
 
-// A completed step n -> n + 1, as a monitor or writer sees it: the states, the masses, the constraints' sets and the
-// work they did, the needle, and what the step's sums say. Read-only, apart from the step control.
-struct StepRecord {
-  long step = 0;            // n + 1 (0 before the first step)
-  double time = 0.0;        // s, at n + 1
-  double step_size = 0.0;   // t(n+1) - t(n)
-  double previous_step_size = 0.0;  // t(n) - t(n-1); 0 at the first step
-  double load_fraction = 0.0;       // at n + 1
-  long steady_states = 0;           // equilibria the integrator reported so far (relaxed load increments)
-  std::span<const double> u;     // displacements at n + 1 (3 per node); empty on steps no monitor reads it
-  std::span<const double> mass;  // per node, as the integrator uses it
-  StepSums sums;                 // the step's reductions over the unknowns (increments, energies)
+// What a monitor may use for the whole run, handed to it once, in before_run, and valid until the run ends: the
+// discretisation and the integrator, the constraint sets (their prescribed values and reactions are those of the
+// latest step whenever a monitor is called), the run's force evaluation and constraint projection, its threads, and
+// the step-size control.
+struct RunContext {
   const Discretisation* discretisation = nullptr;
   const TimeIntegrator* integrator = nullptr;  // the run's (its report())
+  std::span<const NodalConstraints* const> constraint_sets;
+  bool external_forces = false;     // some driver applies forces
+  double time_step_factor = 1.0;    // the integrator's
+  double stable_step_margin = 0.9;  // the integrator's: the largest fraction of the stable step it should take
   // f = f_int(u) for any state u (where the run computes its forces: the CPU, or a backend's device); -1 or the
   // first inadmissible integration point.
   std::function<Index(std::span<const double> u, std::span<double> f)> internal_forces;
@@ -57,24 +54,25 @@ struct StepRecord {
   // Runs body(begin, end) over shares of 0 .. n - 1 on the run's threads (the time step's team); empty: body(0, n).
   // A sum split by these shares would depend on the thread count: sum fixed chunks and add them in order instead.
   ForEachShare for_each_share;
-  // The constraint sets (their prescribed values and reactions at n + 1) and each set's prescribed values at n: the
-  // work the prescribed motions did this step is sum |reaction . (value(n+1) - value(n))| over the constrained
-  // components.
-  std::span<const NodalConstraints* const> constraint_sets;
-  std::span<const std::vector<Vec3>> previous_values;
-  bool external_forces = false;                                      // some driver applies forces
-  std::optional<NeedleStatus> needle;                                // the scene's needle, where it is now
-  double stable_time_step = 0.0;  // the stable step in use for the masses in use (before the integrator's factor)
-  double time_step_factor = 1.0;  // the integrator's
-  double stable_step_margin = 0.9;  // the integrator's: the largest fraction of the stable step it should take
-  StepControl* control = nullptr;  // the run's, while the time loop calls the monitors
+  StepControl* step_control = nullptr;  // the step-size adaptation beside the integrator
+};
 
+// A completed step n -> n + 1, as a monitor or writer sees it: plain data.
+struct StepRecord {
+  LoadState load;                // step n + 1, its time (s) and load fraction
+  double step_size = 0.0;        // t(n+1) - t(n)
+  long steady_states = 0;        // equilibria the integrator reported so far (relaxed load increments)
+  std::span<const double> u;     // displacements at n + 1 (3 per node); empty on steps no monitor reads it
+  std::span<const double> mass;  // per node, as the integrator uses it
+  StepSums sums;                 // the step's reductions over the unknowns (increments, energies)
   // The kinetic energy central differences conserve (J): 1/2 v(n-1/2) . M v(n+1/2), the product of the two
   // half-step velocities around step n (StepSums::kinetic_product); 0 before the second step.
-  double kinetic_energy() const {
-    if (!(step_size > 0.0) || !(previous_step_size > 0.0)) return 0.0;
-    return std::abs(0.5 / (step_size * previous_step_size) * sums.kinetic_product);
-  }
+  double kinetic_energy = 0.0;
+  // Each constraint set's prescribed values at n (RunContext::constraint_sets has those at n + 1): the work the
+  // prescribed motions did this step is sum |reaction . (value(n+1) - value(n))| over the constrained components.
+  std::span<const std::vector<Vec3>> previous_values;
+  std::optional<NeedleStatus> needle;  // the scene's needle, where it is now
+  double stable_time_step = 0.0;       // the stable step in use for the masses in use (before the integrator's factor)
 };
 
 // Called by the time loop around every completed step: the checks (mtled/monitors: energy growth, the stable step,
@@ -84,8 +82,8 @@ class StepMonitor {
  public:
   virtual ~StepMonitor();
   virtual std::string name() const = 0;
-  // Once, with the initial state (step 0), before the first step.
-  virtual void before_run(const StepRecord&) {}
+  // Once, with what the monitor may use for the whole run and the initial state (step 0), before the first step.
+  virtual void before_run(const RunContext&, const StepRecord&) {}
   // Throws InstabilityError (naming the step, what and where) to stop the run.
   virtual void after_step(const StepRecord& step) = 0;
   // Whether after_step reads StepRecord::u at this step (n + 1). An engine that spreads the nodes over processes

@@ -128,8 +128,9 @@ class Simulation final : public DiscreteSystem, private StepControl {
   long steady_states_ = 0;
   std::vector<std::vector<Vec3>> previous_values_;  // prescribed values of the previous step, per set
   double step_size_ = 0.0, previous_step_size_ = 0.0;
-  double time_step_factor_ = 1.0;  // the integrator's, read once it is initialised
-  double stable_step_margin_ = 0.9;  // the integrator's
+  // What the monitors may use for the run, built once the integrator is initialised.
+  RunContext run_context();
+  RunContext run_context_;
   std::vector<std::shared_ptr<StepMonitor>> monitors_;
   std::vector<Index> nodes_read_;  // the drivers' reads at this update
   bool displacement_whole_ = true;  // u_n is whole: the monitors read it this step, or the run has ended

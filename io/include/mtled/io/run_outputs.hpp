@@ -41,7 +41,7 @@ class HistoryWriter final : public OutputWriter {
  public:
   HistoryWriter(const OutputFolder& folder, const Parameters& output);
   std::string name() const override { return "history"; }
-  void before_run(const StepRecord& initial) override;
+  void before_run(const RunContext& run, const StepRecord& initial) override;
   void after_step(const StepRecord& step) override;
   bool reads_displacement(long) const override { return false; }
 
@@ -52,6 +52,7 @@ class HistoryWriter final : public OutputWriter {
 
   const OutputFolder& folder_;
   long every_;
+  std::span<const NodalConstraints* const> constraint_sets_;  // the run's (before_run)
   bool relaxing_ = false;
   long last_recorded_ = -1, steady_states_ = 0;
   OutputFolder::Stream needle_, needle_transient_, reactions_, reactions_transient_;
@@ -62,7 +63,7 @@ class SnapshotWriter final : public OutputWriter {
  public:
   SnapshotWriter(const OutputFolder& folder, const Parameters& output, const ForceKernel& kernel);
   std::string name() const override { return "snapshots"; }
-  void before_run(const StepRecord& initial) override;
+  void before_run(const RunContext& run, const StepRecord& initial) override;
   void after_step(const StepRecord& step) override;
   bool reads_displacement(long step) const override { return step % every_ == 0 && step > 0; }
 
