@@ -47,8 +47,8 @@ Simulation& simulation_for(int threads, const std::string& precision) {
 void internal_forces(benchmark::State& state, const std::string& precision) {
   const int threads = static_cast<int>(state.range(0));
   Simulation& simulation = simulation_for(threads, precision);
-  const Discretisation& model = simulation.discretisation();
-  const ForceKernel& kernel = simulation.force_kernel();
+  const Discretisation& model = simulation.system().discretisation();
+  const ForceKernel& kernel = simulation.system().force_kernel();
   const std::size_t dofs = 3 * static_cast<std::size_t>(model.node_count());
   // A smooth field of about 1% strain: every integration point does real work.
   std::vector<double> u(dofs), f(dofs);
@@ -90,7 +90,7 @@ BENCHMARK(BM_InternalForcesBaseline)->Arg(1)->ArgName("threads")->Unit(benchmark
 // stream evicts it between steps.
 void BM_ConstraintProjection(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
-  const Discretisation& model = simulation_for(threads, "single").discretisation();
+  const Discretisation& model = simulation_for(threads, "single").system().discretisation();
   NodalConstraints bottom;  // the scene's fixed boundary, without the needle's driven nodes
   bottom.name = "bottom";
   for (const Index node : model.mesh().node_sets.at("bottom")) bottom.add_node(node, Vec3::Zero());

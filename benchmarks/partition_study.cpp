@@ -147,12 +147,12 @@ int study(int argc, char** argv) {
   PluginCatalog catalog(plugin_search_path({}, scene_plugin_paths(document)));
   const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
   const Simulation simulation(scene, catalog);
-  const Discretisation& model = simulation.discretisation();
+  const Discretisation& model = simulation.system().discretisation();
   // The steps on which a monitor reads the whole displacement: the fold check's (the most frequent; the stable-step
   // estimate's are rarer), or the snapshots' when more frequent.
   // The constraint products summed over the ranks every step: 8 bytes per constrained row and component.
   double product_bytes = 0.0;
-  for (const NodalConstraints* set : simulation.constraint_sets())
+  for (const NodalConstraints* set : simulation.system().constraint_sets())
     product_bytes += 8.0 * static_cast<double>(set->size()) *
                      static_cast<double>(std::count(set->components().begin(), set->components().end(), true));
   long whole_every = scene.section("monitors").integer("inversion_every_steps");

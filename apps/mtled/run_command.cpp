@@ -60,15 +60,16 @@ class SceneRun {
       simulation_ = std::make_unique<Simulation>(scene_, catalog_);
       check_displacement_field();
       folded_ = add_scene_monitors(*simulation_, scene_);
-      if (auto failure = injected_failure()) simulation_->add_monitor(failure);
+      if (auto failure = injected_failure()) simulation_->loop().add_monitor(failure);
       writers_ = add_scene_writers(*simulation_, scene_, folder_);
       writers_.push_back(std::make_shared<ProgressWriter>(progress, interrupted));
-      simulation_->add_monitor(writers_.back());
+      simulation_->loop().add_monitor(writers_.back());
       setup_time_ = seconds_since(setup_start);
-      summary_["backend"] = simulation_->backend();
-      log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time_, simulation_->unscaled_stable_time_step());
+      summary_["backend"] = simulation_->system().backend();
+      log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time_,
+                 simulation_->system().unscaled_stable_time_step());
       solve_start_ = Clock::now();
-      simulation_->run();
+      simulation_->loop().run();
     } catch (const InstabilityError& e) {
       return unstable(e);
     } catch (const Interrupted&) {
@@ -103,18 +104,19 @@ class SceneRun {
   // status "unstable" with the diagnostic and the last state whose forces were admissible (never named result.vtu);
   // the writers keep their history up to it. Exit 3.
   int unstable(const InstabilityError& e) {
-    const StepRecord last = simulation_->last_step();
+    const StepRecord last = simulation_->system().last_step();
     for (const auto& writer : writers_) writer->finish(last);
     record(seconds_since(solve_start_));
     const bool inverted = e.diagnostic().what == "inverted_material";
     std::vector<CellField> folds;
     if (folded_ && !folded_->per_tet.empty()) folds.push_back({"folded", 1, folded_->per_tet});
-    write_state(folder_, "last_good_state.vtu", simulation_->force_kernel(),
-                inverted ? simulation_->previous_displacement() : simulation_->displacement(), scene_.section("output"),
-                false, folds);
+    write_state(folder_, "last_good_state.vtu", simulation_->system().force_kernel(),
+                inverted ? simulation_->system().previous_displacement() : simulation_->system().displacement(),
+                scene_.section("output"), false, folds);
     // An inverted point beside the needle: where, against the needle, and what the scene can still do about it.
     Diagnostic diagnostic = e.diagnostic();
-    const auto needle = simulation_->needle() ? std::optional(simulation_->needle()->status()) : std::nullopt;
+    const auto needle =
+        simulation_->system().needle() ? std::optional(simulation_->system().needle()->status()) : std::nullopt;
     if (inverted && needle && !diagnostic.coordinates.empty())
       diagnostic.detail += fold_advice_at(scene_, *needle, diagnostic.coordinates.front());
     summary_.record_instability(diagnostic, "last_good_state.vtu");
@@ -130,7 +132,7 @@ class SceneRun {
     if (!error.empty()) summary_["error"] = error;
     summary_.write();
     if (status == "interrupted")
-      log().error("interrupted at step {}; {} says so", simulation_ ? simulation_->step() : 0,
+      log().error("interrupted at step {}; {} says so", simulation_ ? simulation_->system().step() : 0,
                   (folder_.path() / "summary.json").string());
     return 1;
   }
@@ -140,7 +142,7 @@ class SceneRun {
   void check_displacement_field() const {
     const auto like = scene_.section("output").optional_file("displacement_field_like");
     if (!like) return;
-    if (simulation_->discretisation().mesh().coordinate_system.empty())
+    if (simulation_->system().discretisation().mesh().coordinate_system.empty())
       throw InputError("/output/displacement_field_like",
                        "the mesh records no patient frame (LPS or RAS), so where it lies in the image is not known: "
                        "mesh the image itself (a label_map mesh source records it), or leave this out and run mtled "
@@ -160,7 +162,7 @@ class SceneRun {
     field.output = folder_.path() / (output.string("displacement_field_format") == "nifti" ? "displacement_field.nii.gz"
                                                                                            : "displacement_field.nrrd");
     field.direction = output.string("displacement_field_direction");
-    field.frame = simulation_->discretisation().mesh().coordinate_system;
+    field.frame = simulation_->system().discretisation().mesh().coordinate_system;
     field.decay_mm = 1e3 * output.number("displacement_field_decay");
     field_command(field, plugin_paths_);
   }
@@ -168,8 +170,8 @@ class SceneRun {
   // result.vtu (and the displacement field the output section asks for), then summary.json with status "ok": the
   // needle, the reactions and the error indicators.
   int succeeded(double solve_time) {
-    const auto u = write_state(folder_, "result.vtu", simulation_->force_kernel(), simulation_->displacement(),
-                               scene_.section("output"), true);
+    const auto u = write_state(folder_, "result.vtu", simulation_->system().force_kernel(),
+                               simulation_->system().displacement(), scene_.section("output"), true);
     try {
       write_displacement_field();
     } catch (const InputError& e) {
@@ -181,8 +183,9 @@ class SceneRun {
     summary_["error_indicators"] = error_indicators(*simulation_);
     summary_["status"] = "ok";
     summary_.write();
-    log().info("done: {} steps, solve {:.2f} s, {:.3g} integration-point updates/s; results in {}", simulation_->step(),
-               solve_time, summary_["ip_updates_per_s"].get<double>(), folder_.path().string());
+    log().info("done: {} steps, solve {:.2f} s, {:.3g} integration-point updates/s; results in {}",
+               simulation_->system().step(), solve_time, summary_["ip_updates_per_s"].get<double>(),
+               folder_.path().string());
     return 0;
   }
 
@@ -217,9 +220,9 @@ int replica_run(const RunOptions& options, const Scene& scene, PluginCatalog& ca
   omp_set_num_threads(thread_count(options));
   Simulation simulation(scene, catalog);
   add_scene_monitors(simulation, scene);
-  if (auto failure = injected_failure()) simulation.add_monitor(failure);
+  if (auto failure = injected_failure()) simulation.loop().add_monitor(failure);
   try {
-    simulation.run();
+    simulation.loop().run();
   } catch (const InstabilityError&) {
     return 3;  // rank 0 reports it
   }

@@ -197,8 +197,8 @@ std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulat
   std::vector<std::shared_ptr<OutputWriter>> writers;
   writers.push_back(std::make_shared<HistoryWriter>(folder, output));  // opens only the files the run has rows for
   if (output.integer("every_steps") > 0)
-    writers.push_back(std::make_shared<SnapshotWriter>(folder, output, simulation.force_kernel()));
-  for (const auto& writer : writers) simulation.add_monitor(writer);
+    writers.push_back(std::make_shared<SnapshotWriter>(folder, output, simulation.system().force_kernel()));
+  for (const auto& writer : writers) simulation.loop().add_monitor(writer);
   return writers;
 }
 
@@ -240,7 +240,7 @@ void RunSummary::record_resources(const PluginCatalog& catalog, double setup_tim
 }
 
 void RunSummary::record_simulation(const Simulation& simulation, double solve_time) {
-  const Discretisation& model = simulation.discretisation();
+  const Discretisation& model = simulation.system().discretisation();
   const auto stats = model.points().support;
   summary_["nodes"] = model.node_count();
   summary_["integration_points"] = model.points().count();
@@ -252,21 +252,22 @@ void RunSummary::record_simulation(const Simulation& simulation, double solve_ti
   mesh["min_radius_ratio"] = quality.min_radius_ratio;
   if (!model.mesh().coordinate_system.empty()) mesh["coordinate_system"] = model.mesh().coordinate_system;
   summary_["mesh"] = mesh;
-  summary_["backend"] = simulation.backend();  // with what it counted over the run
-  summary_["steps"] = simulation.step();
-  summary_["simulated_time_s"] = simulation.time();
-  summary_["stable_time_step_s"] = simulation.unscaled_stable_time_step();
-  summary_["constraint_factorisations"] = simulation.constraints().factorisations();
-  summary_["force_evaluations"] = simulation.force_evaluations();
-  summary_["monitors"] = simulation.monitor_reports();
-  summary_["ip_updates_per_s"] =
-      solve_time > 0 ? static_cast<double>(simulation.force_evaluations()) * model.points().count() / solve_time : 0.0;
-  const IntegratorReport report = simulation.integrator().report();
+  summary_["backend"] = simulation.system().backend();  // with what it counted over the run
+  summary_["steps"] = simulation.system().step();
+  summary_["simulated_time_s"] = simulation.system().time();
+  summary_["stable_time_step_s"] = simulation.system().unscaled_stable_time_step();
+  summary_["constraint_factorisations"] = simulation.system().constraints().factorisations();
+  summary_["force_evaluations"] = simulation.system().force_evaluations();
+  summary_["monitors"] = simulation.loop().monitor_reports();
+  summary_["ip_updates_per_s"] = solve_time > 0 ? static_cast<double>(simulation.system().force_evaluations()) *
+                                                      model.points().count() / solve_time
+                                                : 0.0;
+  const IntegratorReport report = simulation.loop().integrator().report();
   summary_["integrator"] = to_json(report);
-  if (report.relaxation) summary_["integrator"]["relaxed_states"] = simulation.steady_states();
+  if (report.relaxation) summary_["integrator"]["relaxed_states"] = simulation.system().steady_states();
   summary_["time_step_s"] = report.time_step;
   // Where the needle got to, on every outcome: a run stopped unstable keeps the depth and force it reached.
-  if (const auto* needle = simulation.needle()) {
+  if (const auto* needle = simulation.system().needle()) {
     const NeedleStatus s = needle->status();
     summary_["needle"] = {{"final_depth_m", s.depth},
                           {"final_force_N", s.force},
@@ -282,7 +283,7 @@ void RunSummary::record_result(const Simulation& simulation, std::span<const dou
     max_displacement = std::max(max_displacement, std::sqrt(u[i] * u[i] + u[i + 1] * u[i + 1] + u[i + 2] * u[i + 2]));
   summary_["max_displacement_m"] = max_displacement;
   json reactions = json::object();
-  for (const auto* set : simulation.constraint_sets()) reactions[set->name] = vec_json(set->total_reaction());
+  for (const auto* set : simulation.system().constraint_sets()) reactions[set->name] = vec_json(set->total_reaction());
   summary_["final_reactions_N"] = reactions;
 }
 

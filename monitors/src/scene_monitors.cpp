@@ -45,12 +45,12 @@ std::string fold_advice_at(const Scene& scene, const NeedleStatus& needle, const
 
 std::shared_ptr<const FoldedTets> add_scene_monitors(Simulation& simulation, const Scene& scene) {
   const Parameters& monitors = scene.section("monitors");
-  simulation.add_monitor(std::make_unique<EnergyMonitor>());
-  if (auto monitor = StableStepMonitor::from_section(monitors, simulation.discretisation()))
-    simulation.add_monitor(std::move(monitor));
+  simulation.loop().add_monitor(std::make_unique<EnergyMonitor>());
+  if (auto monitor = StableStepMonitor::from_section(monitors, simulation.system().discretisation()))
+    simulation.loop().add_monitor(std::move(monitor));
   auto folded = std::make_shared<FoldedTets>();
   if (auto monitor = InversionMonitor::from_section(monitors, fold_advice(scene), folded))
-    simulation.add_monitor(std::move(monitor));
+    simulation.loop().add_monitor(std::move(monitor));
   return folded;
 }
 

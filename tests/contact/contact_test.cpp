@@ -56,19 +56,20 @@ Outcome run(const json& needle) {
   const test::OneThread one_thread;
   const Scene scene = make_scene(scene_json(needle));
   Simulation simulation(scene, test::catalog());
-  simulation.run();
+  simulation.loop().run();
   Outcome out;
-  out.status = simulation.needle()->status();
-  const Discretisation& model = simulation.discretisation();
-  const std::vector<double> u = simulation.interpolated_displacement();
+  out.status = simulation.system().needle()->status();
+  const Discretisation& model = simulation.system().discretisation();
+  const std::vector<double> u =
+      test::interpolated(simulation.system().discretisation(), simulation.system().displacement());
   for (Index i = 0; i < model.node_count(); ++i)
     out.positions.push_back(model.nodes()[i] + Vec3(u[3 * i], u[3 * i + 1], u[3 * i + 2]));
-  for (const NodalConstraints* set : simulation.constraint_sets()) {
+  for (const NodalConstraints* set : simulation.system().constraint_sets()) {
     if (set->name != "needle") continue;
     for (std::size_t k = 0; k < set->nodes().size(); ++k)
       out.contacts.push_back({out.positions[set->nodes()[k]], set->reactions[k]});
   }
-  out.error_bound = simulation.integrator().report().relaxation.value().error_bound;
+  out.error_bound = simulation.loop().integrator().report().relaxation.value().error_bound;
   for (double h : model.cloud().spacing) out.spacing += h / static_cast<double>(model.node_count());
   return out;
 }
@@ -254,13 +255,14 @@ TEST(RigidContact, BeforePunctureTheFootprintFollowsTheTip) {
   const test::OneThread one_thread;
   const Scene scene = make_scene(scene_json(needle));
   Simulation simulation(scene, test::catalog());
-  simulation.run();
-  const NeedleStatus s = simulation.needle()->status();
+  simulation.loop().run();
+  const NeedleStatus s = simulation.system().needle()->status();
   EXPECT_EQ(s.phase, NeedlePhase::indentation);
   EXPECT_LT(s.puncture_depth, 0.0);
   EXPECT_GT(s.force, 0.0);
-  const std::vector<double> u = simulation.interpolated_displacement();
-  for (const NodalConstraints* set : simulation.constraint_sets()) {
+  const std::vector<double> u =
+      test::interpolated(simulation.system().discretisation(), simulation.system().displacement());
+  for (const NodalConstraints* set : simulation.system().constraint_sets()) {
     if (set->name != "needle") continue;
     ASSERT_FALSE(set->nodes().empty());
     for (Index n : set->nodes()) {

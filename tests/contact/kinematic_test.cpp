@@ -47,12 +47,13 @@ Outcome run(const json& needle_options, const json& integrator_options = json::o
   scene_file["integrator"].update(integrator_options);
   const Scene scene = validate_scene(parse_scene(scene_file.dump(), "kinematic_test.json"), test::catalog());
   Simulation simulation(scene, test::catalog());
-  simulation.run();
+  simulation.loop().run();
   Outcome out;
-  out.status = simulation.needle()->status();
-  const Discretisation& model = simulation.discretisation();
-  const std::vector<double> u = simulation.interpolated_displacement();
-  for (const NodalConstraints* set : simulation.constraint_sets()) {
+  out.status = simulation.system().needle()->status();
+  const Discretisation& model = simulation.system().discretisation();
+  const std::vector<double> u =
+      test::interpolated(simulation.system().discretisation(), simulation.system().displacement());
+  for (const NodalConstraints* set : simulation.system().constraint_sets()) {
     if (set->name == "needle") {
       out.components = set->components();
       for (Index n : set->nodes())
@@ -66,7 +67,7 @@ Outcome run(const json& needle_options, const json& integrator_options = json::o
       EXPECT_TRUE(model.shape_functions_at(x, support, values));
       Vec3 displacement = Vec3::Zero();
       for (std::size_t k = 0; k < support.size(); ++k)
-        displacement += values[k] * Vec3(simulation.displacement().subspan(3 * support[k], 3).data());
+        displacement += values[k] * Vec3(simulation.system().displacement().subspan(3 * support[k], 3).data());
       out.shaft.push_back({kHeight - x.z(), displacement});
       out.shaft_offsets.push_back(Vec3(x.x(), x.y(), 0.0));
     }

@@ -25,10 +25,10 @@ TEST(DriverForces, AppliedForcesAreBalancedByTheReactions) {
       {"discretisation", {{"consistent_integration", false}}},
       {"integrator", {{"type", "dynamic_relaxation"}, {"load_steps", 200}, {"tolerance", 1e-8}}}};
   Simulation simulation(validate_scene(parse_scene(scene.dump(), "driver_forces_test.json"), catalog), catalog);
-  ASSERT_TRUE(simulation.has_external_forces());
-  simulation.run();
-  ASSERT_EQ(simulation.constraint_sets().size(), 1u);
-  const Vec3 reaction = simulation.constraint_sets()[0]->total_reaction();
+  ASSERT_TRUE(simulation.system().has_external_forces());
+  simulation.loop().run();
+  ASSERT_EQ(simulation.system().constraint_sets().size(), 1u);
+  const Vec3 reaction = simulation.system().constraint_sets()[0]->total_reaction();
   EXPECT_LT((reaction + total).norm(), 1e-5 * total.norm()) << "reaction " << reaction.transpose();
 }
 

@@ -60,11 +60,11 @@ SteadyStateDifference difference_from(std::span<const double> u, std::span<const
 // projection, assembled column by column).
 // `at_current_state`: K at the simulation's displacement instead of u = 0.
 double exact_stable_step(const Simulation& simulation, bool constrained = false, bool at_current_state = false) {
-  const ForceKernel& kernel = simulation.force_kernel();
-  const auto mass = simulation.mass();
-  const Eigen::Index n = 3 * simulation.discretisation().node_count();
+  const ForceKernel& kernel = simulation.system().force_kernel();
+  const auto mass = simulation.system().mass();
+  const Eigen::Index n = 3 * simulation.system().discretisation().node_count();
   std::vector<double> u(static_cast<std::size_t>(n), 0.0), f(static_cast<std::size_t>(n)), f0(u);
-  if (at_current_state) u.assign(simulation.displacement().begin(), simulation.displacement().end());
+  if (at_current_state) u.assign(simulation.system().displacement().begin(), simulation.system().displacement().end());
   EXPECT_LT(kernel.internal_forces(u, f0), 0);
   constexpr double kStep = 1e-10;  // m: strains of 1e-7 on a 1 mm spacing, linear to round-off
   Eigen::MatrixXd a(n, n);
@@ -83,7 +83,7 @@ double exact_stable_step(const Simulation& simulation, bool constrained = false,
     for (Eigen::Index j = 0; j < n; ++j) {
       std::fill(column.begin(), column.end(), 0.0);
       column[static_cast<std::size_t>(j)] = 1.0 / std::sqrt(mass[j / 3]);
-      simulation.constraints().project_out(column);
+      simulation.system().constraints().project_out(column);
       for (Eigen::Index i = 0; i < n; ++i) p(i, j) = std::sqrt(mass[i / 3]) * column[static_cast<std::size_t>(i)];
     }
     a = p * a * p;
@@ -104,8 +104,8 @@ TEST(StableStepMonitor, LanczosEstimateMatchesTheAssembledSpectrum) {
                                             {{"stable_step_every_steps", 1000000}, {"stable_step", "adapt"}}, false));
   Simulation simulation(scene, test::catalog());
   add_scene_monitors(simulation, scene);
-  simulation.run();
-  const json report = simulation.monitor_reports().at("stable_step");
+  simulation.loop().run();
+  const json report = simulation.loop().monitor_reports().at("stable_step");
   ASSERT_EQ(report.at("checks").get<long>(), 1);
   const double estimate = report.at("last_estimate_s").get<double>();
   const double exact = exact_stable_step(simulation);
@@ -116,9 +116,9 @@ TEST(StableStepMonitor, LanczosEstimateMatchesTheAssembledSpectrum) {
   EXPECT_GE(estimate, exact * 0.95);
   EXPECT_LE(estimate, exact * 1.02);
   // The per-integration-point bound the integrators use must be conservative.
-  EXPECT_LE(simulation.stable_time_step(), exact);
+  EXPECT_LE(simulation.system().stable_time_step(), exact);
   RecordProperty("estimate_over_exact", std::to_string(estimate / exact));
-  RecordProperty("setup_bound_over_exact", std::to_string(simulation.stable_time_step() / exact));
+  RecordProperty("setup_bound_over_exact", std::to_string(simulation.system().stable_time_step() / exact));
 }
 
 // The Lanczos iteration's reorthogonalisation by row chunks: w loses exactly its part in the span of Q's first columns
@@ -159,9 +159,9 @@ TEST(StableStepMonitor, ConstraintProjectionKeepsConstrainedValuesAndIsMOrthogon
   const Scene scene = make_scene(cube_scene({{"type", "dynamic_relaxation"}, {"load_steps", 1}},
                                             {{"stable_step_every_steps", 1000000}}, true, 0.0));
   Simulation simulation(scene, test::catalog());
-  simulation.run();
-  const Discretisation& model = simulation.discretisation();
-  const auto mass = simulation.mass();
+  simulation.loop().run();
+  const Discretisation& model = simulation.system().discretisation();
+  const auto mass = simulation.system().mass();
   const std::size_t n = 3 * static_cast<std::size_t>(model.node_count());
   std::vector<double> v(n), w(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -169,11 +169,11 @@ TEST(StableStepMonitor, ConstraintProjectionKeepsConstrainedValuesAndIsMOrthogon
     w[i] = std::cos(0.7 * static_cast<double>(i));
   }
   std::vector<double> pv = v, pw = w;
-  simulation.constraints().project_out(pv);
-  simulation.constraints().project_out(pw);
+  simulation.system().constraints().project_out(pv);
+  simulation.system().constraints().project_out(pw);
   const double scale = Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(n)).lpNorm<Eigen::Infinity>();
   int checked = 0;
-  for (const NodalConstraints* set : simulation.constraint_sets())
+  for (const NodalConstraints* set : simulation.system().constraint_sets())
     for (Index node : set->nodes()) {
       const Vec3 value = model.interpolate_node(node, pv);
       for (int c = 0; c < 3; ++c)
@@ -184,7 +184,7 @@ TEST(StableStepMonitor, ConstraintProjectionKeepsConstrainedValuesAndIsMOrthogon
     }
   EXPECT_GT(checked, 100);
   std::vector<double> twice = pv;
-  simulation.constraints().project_out(twice);
+  simulation.system().constraints().project_out(twice);
   double change = 0.0, removed_dot_kept = 0.0, removed_norm = 0.0, kept_norm = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     change = std::max(change, std::abs(twice[i] - pv[i]));
@@ -207,8 +207,8 @@ TEST(StableStepMonitor, ConstrainedEstimateMatchesTheConstrainedSpectrum) {
                                             0.0));
   Simulation simulation(scene, test::catalog());
   add_scene_monitors(simulation, scene);
-  simulation.run();
-  const json report = simulation.monitor_reports().at("stable_step");
+  simulation.loop().run();
+  const json report = simulation.loop().monitor_reports().at("stable_step");
   ASSERT_EQ(report.at("checks").get<long>(), 1);
   const double estimate = report.at("last_estimate_s").get<double>();
   const double exact = exact_stable_step(simulation, true);
@@ -228,7 +228,7 @@ TEST(StableStepMonitor, StopsAStepAboveTheStableStepAtTheFirstCheck) {
   Simulation simulation(scene, test::catalog());
   add_scene_monitors(simulation, scene);
   try {
-    simulation.run();
+    simulation.loop().run();
     FAIL() << "a time step 10 times the bound ran";
   } catch (const InstabilityError& e) {
     EXPECT_EQ(e.diagnostic().what, "time_step_above_stable");
@@ -257,23 +257,24 @@ TEST(StableStepMonitor, AdaptsTheStepWhereAFixedStepBlowsUp) {
     const Scene fixed = scene_with({{"stable_step_every_steps", 0}}, 0.9);
     Simulation simulation(fixed, test::catalog());
     add_scene_monitors(simulation, fixed);
-    EXPECT_THROW(simulation.run(), InstabilityError);
+    EXPECT_THROW(simulation.loop().run(), InstabilityError);
   }
   const Scene adapt = scene_with({{"stable_step_every_steps", 20}, {"stable_step", "adapt"}}, 0.9);
   Simulation adapted(adapt, test::catalog());
   add_scene_monitors(adapted, adapt);
-  adapted.run();
-  const json report = adapted.monitor_reports().at("stable_step");
+  adapted.loop().run();
+  const json report = adapted.loop().monitor_reports().at("stable_step");
   EXPECT_GE(report.at("time_step_lowered").get<long>(), 1) << report.dump();
   // The integrator took the lowered step, below the setup's (0.9 of the mass-scaled setup estimate).
-  const double step = adapted.integrator().report().time_step;
+  const double step = adapted.loop().integrator().report().time_step;
   EXPECT_NEAR(step, report.at("lowest_time_step_s").get<double>(), 1e-12 * step);
   EXPECT_LT(step, 0.9 * report.at("setup_estimate_s").get<double>());
   const Scene small = scene_with({{"stable_step_every_steps", 0}}, 0.05);
   Simulation reference(small, test::catalog());
   add_scene_monitors(reference, small);
-  reference.run();
-  const auto [largest, difference] = difference_from(adapted.displacement(), reference.displacement());
+  reference.loop().run();
+  const auto [largest, difference] =
+      difference_from(adapted.system().displacement(), reference.system().displacement());
   // Each relaxation stops within 1e-5 of the largest displacement of its steady state (with margin: 10x).
   EXPECT_LT(difference, 1e-4 * largest);
   RecordProperty("difference_over_largest", std::to_string(difference / largest));
@@ -297,25 +298,26 @@ TEST(StableStepMonitor, MassesScaledToTheHeldStateKeepThePerPointBound) {
     const Scene valid = make_scene(scene);
     auto simulation = std::make_unique<Simulation>(valid, test::catalog());
     add_scene_monitors(*simulation, valid);
-    simulation->run();
+    simulation->loop().run();
     return simulation;
   };
   const auto scaled = run(true), unscaled = run(false);
   // The setup's per-point bound (mass-scaled), the same for both: the scaling at the hold does not move it.
-  const double bound = scaled->monitor_reports().at("stable_step").at("setup_estimate_s").get<double>();
-  EXPECT_EQ(unscaled->monitor_reports().at("stable_step").at("setup_estimate_s").get<double>(), bound);
+  const double bound = scaled->loop().monitor_reports().at("stable_step").at("setup_estimate_s").get<double>();
+  EXPECT_EQ(unscaled->loop().monitor_reports().at("stable_step").at("setup_estimate_s").get<double>(), bound);
   const double exact_scaled = exact_stable_step(*scaled, false, true);
   const double exact_unscaled = exact_stable_step(*unscaled, false, true);
   RecordProperty("exact_over_bound_scaled", std::to_string(exact_scaled / bound));
   RecordProperty("exact_over_bound_unscaled", std::to_string(exact_unscaled / bound));
   EXPECT_LT(exact_unscaled, 0.9 * bound);
   EXPECT_GE(exact_scaled, bound);
-  const auto [largest, difference] = difference_from(scaled->displacement(), unscaled->displacement());
+  const auto [largest, difference] =
+      difference_from(scaled->system().displacement(), unscaled->system().displacement());
   // Each relaxation stops within 1e-5 of the largest displacement of the same steady state (with margin: 10x).
   EXPECT_LT(difference, 1e-4 * largest);
   RecordProperty("difference_over_largest", std::to_string(difference / largest));
-  RecordProperty("steps_scaled", std::to_string(scaled->step()));
-  RecordProperty("steps_unscaled", std::to_string(unscaled->step()));
+  RecordProperty("steps_scaled", std::to_string(scaled->system().step()));
+  RecordProperty("steps_unscaled", std::to_string(unscaled->system().step()));
 }
 
 // Records every step's size and whether it held the loads (its load fraction equal to the previous step's).
@@ -354,10 +356,11 @@ TEST(StableStepMonitor, FollowsTheStableStepUpWhileTheLoadsAreHeld) {
     Simulation simulation(scene, test::catalog());
     add_scene_monitors(simulation, scene);
     auto sizes = std::make_shared<StepSizes>();
-    simulation.add_monitor(sizes);
-    simulation.run();
-    return Run{simulation.monitor_reports().at("stable_step"), sizes->entries,
-               std::vector<double>(simulation.displacement().begin(), simulation.displacement().end())};
+    simulation.loop().add_monitor(sizes);
+    simulation.loop().run();
+    return Run{
+        simulation.loop().monitor_reports().at("stable_step"), sizes->entries,
+        std::vector<double>(simulation.system().displacement().begin(), simulation.system().displacement().end())};
   };
   const Run adapt = run("adapt"), follow = run("follow");
   EXPECT_EQ(adapt.stable_step.at("time_step_lowered").get<long>(), 0) << adapt.stable_step.dump();
@@ -396,9 +399,10 @@ TEST(StableStepMonitor, FollowIsAdaptForCentralDifferences) {
                                               {{"stable_step", response}, {"stable_step_every_steps", 100}}, true));
     Simulation simulation(scene, test::catalog());
     add_scene_monitors(simulation, scene);
-    simulation.run();
-    return std::make_pair(simulation.monitor_reports().at("stable_step"),
-                          std::vector<double>(simulation.displacement().begin(), simulation.displacement().end()));
+    simulation.loop().run();
+    return std::make_pair(
+        simulation.loop().monitor_reports().at("stable_step"),
+        std::vector<double>(simulation.system().displacement().begin(), simulation.system().displacement().end()));
   };
   const auto [adapt, adapt_u] = run("adapt");
   const auto [follow, follow_u] = run("follow");
@@ -415,9 +419,9 @@ TEST(StableStepMonitor, ChangesNothingInTheResultsUnderAdapt) {
                                               {{"stable_step_every_steps", every}, {"stable_step", "adapt"}}, true));
     Simulation simulation(scene, test::catalog());
     add_scene_monitors(simulation, scene);
-    simulation.run();
-    EXPECT_EQ(simulation.monitor_reports().contains("stable_step"), every != 0);
-    return std::vector<double>(simulation.displacement().begin(), simulation.displacement().end());
+    simulation.loop().run();
+    EXPECT_EQ(simulation.loop().monitor_reports().contains("stable_step"), every != 0);
+    return std::vector<double>(simulation.system().displacement().begin(), simulation.system().displacement().end());
   };
   EXPECT_EQ(final_state(0), final_state(50));  // bitwise: the monitor only reads the state
 }

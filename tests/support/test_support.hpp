@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -51,7 +52,7 @@ class OneThread {
 // the faces.
 TetMesh box_mesh(Vec3 size, int nx, int ny, int nz, double jitter = 0.0, unsigned seed = 1);
 
-// A discretisation and the force kernel on it, as a Simulation builds them, for tests that need no scene.
+// A discretisation and the force kernel on it, as a MechanicalSystem builds them, for tests that need no scene.
 struct Discretised {
   Discretised(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
               std::vector<std::shared_ptr<const Material>> materials, Discretisation::Options options,
@@ -61,6 +62,13 @@ struct Discretised {
   Discretisation discretisation;
   ForceKernel kernel;
 };
+
+// The interpolated displacement at every node (3 per node) of the nodal parameters u.
+inline std::vector<double> interpolated(const Discretisation& discretisation, std::span<const double> u) {
+  std::vector<double> out(u.size());
+  discretisation.interpolate(u, out);
+  return out;
+}
 
 // A small cylinder of the paper's gel for the needle models' tests: r = 6 mm, height `height`, about 600
 // nodes (spacing 1.3 mm), Ogden mu = 722 Pa, alpha = -1.3, bottom fixed, MMLS, dynamic relaxation over 300

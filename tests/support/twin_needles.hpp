@@ -71,16 +71,16 @@ inline void expect_needle_reads_only_what_it_declares(const json& document) {
   Simulation simulation(scene, catalog());
   const auto twin = [&] {
     auto needle = make<NeedleModel>(document["needle"]["type"], document["needle"]);
-    needle->setup(simulation.discretisation());
+    needle->setup(simulation.system().discretisation());
     return needle;
   };
   auto monitor = std::make_shared<TwinNeedles>(std::vector{twin(), twin(), twin()});
-  simulation.add_monitor(monitor);
-  simulation.run();
+  simulation.loop().add_monitor(monitor);
+  simulation.loop().run();
   EXPECT_TRUE(monitor->punctured);
   EXPECT_GT(monitor->driven, 0);
   EXPECT_GT(monitor->largest_read, 0u);
-  EXPECT_LT(monitor->largest_read, static_cast<std::size_t>(simulation.discretisation().node_count()));
+  EXPECT_LT(monitor->largest_read, static_cast<std::size_t>(simulation.system().discretisation().node_count()));
 }
 
 }  // namespace mtled::test

@@ -5,8 +5,8 @@
 // reductions. The kernel's own engine runs it on the CPU's thread team (core/src/cpu_engine.cpp); a backend plugin
 // ("backend": {"type": "cuda"}) runs it on a device, where the state and everything precomputed stay, so that only
 // a few values per step cross to the host: the constraint products' rows, the step's sums and the displacements the
-// drivers read. The Simulation drives it (simulation.cpp); nothing else calls it but the monitors' extra force
-// evaluations.
+// drivers read. The MechanicalSystem drives it (mechanical_system.cpp); nothing else calls it but the monitors' extra
+// force evaluations.
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -46,7 +46,7 @@ class StepEngine {
   // same nodes. The default: displacement().
   virtual std::span<const double> displacement_at(std::span<const Index> nodes);
   // Whether displacement_at brings only the nodes asked for (the nodes are spread over processes, or on a device);
-  // where it does not (the default), the Simulation does not ask the drivers which nodes they read.
+  // where it does not (the default), the read plan (read_plan.hpp) does not ask the drivers which nodes they read.
   virtual bool spreads_nodes() const;
 
   // f_n = f_int(u_n), kept for predict(); with `sums`, IncrementSums too. Returns -1, or the lowest-numbered
