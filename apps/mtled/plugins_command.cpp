@@ -74,18 +74,11 @@ std::string example_scene_block(const ComponentDeclaration& d) {
   if (d.example().is_object())
     for (const auto& [key, value] : d.example().items()) block[key] = value;
   const std::string text = block.dump();
-  switch (d.category()) {
-    case Category::mesh: return fmt::format("\"mesh\": {}", text);
-    case Category::shape_function: return fmt::format("\"shape_function\": {}", text);
-    case Category::material: return fmt::format("\"materials\": [{}]", text);
-    case Category::boundary: return fmt::format("\"boundaries\": [{}]", text);
-    case Category::needle: return fmt::format("\"needle\": {}", text);
-    case Category::integrator: return fmt::format("\"integrator\": {}", text);
-    case Category::volumetric: return fmt::format("\"volumetric\": {}", text);
-    case Category::backend: return fmt::format("\"backend\": {}", text);
-    case Category::scene: break;
-  }
-  return text;
+  if (d.category() == Category::scene) return text;
+  const CategoryInfo& info = category_info(d.category());
+  const bool list = info.blocks == SceneBlocks::list || info.blocks == SceneBlocks::non_empty_list;
+  if (list) return fmt::format("\"{}\": [{}]", info.scene_key, text);
+  return fmt::format("\"{}\": {}", info.scene_key, text);
 }
 
 int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as_json, bool as_markdown,

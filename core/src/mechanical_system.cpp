@@ -106,7 +106,7 @@ void MechanicalSystem::build_discretisation(const Scene& scene, PluginCatalog& c
   kernel_ = std::make_unique<ForceKernel>(
       *discretisation_, scene.volumetric ? build_component<VolumetricTreatment>(catalog, *scene.volumetric) : nullptr);
   const SupportStatistics stats = discretisation_->points().support;
-  log().info("model: {} nodes, {} integration points, support size min/mean/max {}/{:.1f}/{}",
+  log().info("discretisation: {} nodes, {} integration points, support size min/mean/max {}/{:.1f}/{}",
              discretisation_->node_count(), discretisation_->points().count(), stats.min, stats.mean, stats.max);
 }
 

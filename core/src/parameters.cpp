@@ -11,13 +11,6 @@
 namespace mtled {
 
 namespace {
-constexpr std::pair<Category, std::string_view> kCategoryNames[] = {
-    {Category::mesh, "mesh"},         {Category::shape_function, "shape_function"},
-    {Category::material, "material"}, {Category::boundary, "boundary"},
-    {Category::needle, "needle"},     {Category::integrator, "integrator"},
-    {Category::volumetric, "volumetric"}, {Category::backend, "backend"},
-    {Category::scene, "scene"}};
-
 std::string format_number(double v) {
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
   return fmt::format("{:g}", v);
@@ -37,23 +30,30 @@ std::string short_value(const json& v) {
 }  // namespace
 
 std::string_view to_string(Category category) {
-  for (const auto& [c, name] : kCategoryNames)
-    if (c == category) return name;
-  return "unknown";
+  for (const CategoryInfo& info : kPluginCategories)
+    if (info.category == category) return info.name;
+  return category == Category::scene ? "scene" : "unknown";
 }
 
 std::optional<Category> category_from_string(std::string_view text) {
-  for (const auto& [c, name] : kCategoryNames)
-    if (name == text) return c;
-  return std::nullopt;
+  if (text == "scene") return Category::scene;
+  const Category category = category_from_literal(text);
+  return category == Category::scene ? std::nullopt : std::optional(category);
 }
 
 const std::vector<Category>& plugin_categories() {
-  static const std::vector<Category> categories = {Category::mesh,     Category::shape_function,
-                                                   Category::material, Category::boundary,
-                                                   Category::needle,   Category::integrator,
-                                                   Category::volumetric, Category::backend};
+  static const std::vector<Category> categories = [] {
+    std::vector<Category> all;
+    for (const CategoryInfo& info : kPluginCategories) all.push_back(info.category);
+    return all;
+  }();
   return categories;
+}
+
+const CategoryInfo& category_info(Category category) {
+  for (const CategoryInfo& info : kPluginCategories)
+    if (info.category == category) return info;
+  throw std::logic_error(fmt::format("category_info: {} is not a plugin category", to_string(category)));
 }
 
 std::string_view to_string(ParameterType type) {

@@ -394,9 +394,12 @@ struct Validator {
 };
 
 const std::vector<std::string>& kernel_keys() {
-  static const std::vector<std::string> keys = {"$schema",   "description", "plugin_paths",   "mesh",
-                                                "shape_function", "materials", "boundaries", "needle",
-                                                "integrator", "volumetric", "backend", "discretisation"};
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> all = {"$schema", "description", "plugin_paths"};
+    for (const CategoryInfo& info : kPluginCategories) all.emplace_back(info.scene_key);
+    all.emplace_back("discretisation");
+    return all;
+  }();
   return keys;
 }
 
@@ -534,27 +537,40 @@ json scene_json_schema(PluginCatalog& catalog, const std::vector<SceneSection>& 
     schema["oneOf"].push_back({{"type", "null"}});
     return schema;
   };
-  json properties = {
-      {"$schema", {{"type", "string"}}},
-      {"description", {{"type", "string"}, {"description", "free text about the scene"}}},
-      {"plugin_paths",
-       {{"type", "array"}, {"items", {{"type", "string"}}}, {"description", "extra plugin folders, relative to the scene"}}},
-      {"mesh", one_of(Category::mesh)},
-      {"shape_function", one_of(Category::shape_function)},
-      {"materials", {{"type", "array"}, {"minItems", 1}, {"items", one_of(Category::material)}}},
-      {"boundaries", {{"type", "array"}, {"items", one_of(Category::boundary)}}},
-      {"needle", optional(one_of(Category::needle))},
-      {"integrator", one_of(Category::integrator)},
-      {"volumetric", optional(one_of(Category::volumetric))},
-      {"backend", optional(one_of(Category::backend))},
-      {"discretisation", section_schema(discretisation_declaration())}};
+  json properties = {{"$schema", {{"type", "string"}}},
+                     {"description", {{"type", "string"}, {"description", "free text about the scene"}}},
+                     {"plugin_paths",
+                      {{"type", "array"},
+                       {"items", {{"type", "string"}}},
+                       {"description", "extra plugin folders, relative to the scene"}}},
+                     {"discretisation", section_schema(discretisation_declaration())}};
+  json required = json::array();
+  for (const CategoryInfo& info : kPluginCategories) {
+    json& schema = properties[std::string(info.scene_key)];
+    switch (info.blocks) {
+      case SceneBlocks::one:
+        schema = one_of(info.category);
+        break;
+      case SceneBlocks::optional_one:
+        schema = optional(one_of(info.category));
+        break;
+      case SceneBlocks::list:
+        schema = {{"type", "array"}, {"items", one_of(info.category)}};
+        break;
+      case SceneBlocks::non_empty_list:
+        schema = {{"type", "array"}, {"minItems", 1}, {"items", one_of(info.category)}};
+        break;
+    }
+    if (info.blocks == SceneBlocks::one || info.blocks == SceneBlocks::non_empty_list)
+      required.push_back(info.scene_key);
+  }
   for (const auto& section : sections) properties[section.key] = section_schema(*section.declaration);
   return {{"$schema", "https://json-schema.org/draft/2020-12/schema"},
           {"$id", "https://mtled.org/schema/scene.json"},
           {"title", "mtled scene"},
           {"type", "object"},
           {"properties", properties},
-          {"required", {"mesh", "shape_function", "materials", "integrator"}},
+          {"required", required},
           {"additionalProperties", false}};
 }
 

@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """The documentation stays true to the code: every relative link in README.md and docs/*.md points at a file
 that exists, and every `mtled run`/`mtled validate` example (with its --set overrides) names a scene the
-built mtled accepts, and every `mtled study` or `mtled fit` example names a study or fit file that exists.
+built mtled accepts, and every `mtled study` or `mtled fit` example names a study or fit file that exists; a size
+quoted with the command that counts it ("N lines (`find core -name '*.[ch]pp' | xargs cat | wc -l`)") is within 2%
+of that count.
 
 Usage: check_docs.py SOURCE_DIR MTLED_EXECUTABLE
 """
@@ -56,6 +58,19 @@ for page in pages:
         result = subprocess.run([mtled, "validate", str(target)] + overrides, capture_output=True, text=True)
         if result.returncode != 0:
             problems.append(f"{where}: `mtled validate {words[0]} {' '.join(overrides)}` failed:\n{result.stdout}{result.stderr}")
+
+
+def kernel_lines():
+    return sum(len(path.read_text().splitlines()) for folder in ["core"] for path in (source / folder).rglob("*.[ch]pp"))
+
+
+for page in pages:
+    for line_number, line in enumerate(page.read_text().splitlines(), 1):
+        for quoted in re.findall(r"([\d,]+) lines \(`find core -name '\*\.\[ch\]pp' \| xargs cat \| wc -l`\)", line):
+            actual = kernel_lines()
+            if abs(int(quoted.replace(",", "")) - actual) > 0.02 * actual:
+                problems.append(f"{page.relative_to(source)}:{line_number}: the kernel is quoted at {quoted} lines; "
+                                f"the command counts {actual:,}")
 
 print(f"checked {checked_links} links and {checked_commands} example commands in {len(pages)} pages")
 for problem in problems:

@@ -22,22 +22,41 @@ struct NodeSelector;  // node_selector.hpp: what Parameters::node_set returns
 // a scene. `scene` is the kernel's own sections (discretisation, output).
 enum class Category { mesh, shape_function, material, boundary, needle, integrator, volumetric, backend, scene };
 
+// How many blocks of a category a scene holds under its key.
+enum class SceneBlocks { one, optional_one, list, non_empty_list };
+
+// Every plugin category, once: its name (the CMake CATEGORY, and <category> in the plugin file names
+// mtled-<category>-<type>.so), the scene key its blocks go under, and how many. Scene validation, the scene's JSON
+// schema, the plugin catalog and `mtled plugins` read this table; a new category is a row here, its interface, and the
+// Scene member it is read into.
+struct CategoryInfo {
+  Category category;
+  std::string_view name;
+  std::string_view scene_key;
+  SceneBlocks blocks;
+};
+inline constexpr CategoryInfo kPluginCategories[] = {
+    {Category::mesh, "mesh", "mesh", SceneBlocks::one},
+    {Category::shape_function, "shape_function", "shape_function", SceneBlocks::one},
+    {Category::material, "material", "materials", SceneBlocks::non_empty_list},
+    {Category::boundary, "boundary", "boundaries", SceneBlocks::list},
+    {Category::needle, "needle", "needle", SceneBlocks::optional_one},
+    {Category::integrator, "integrator", "integrator", SceneBlocks::one},
+    {Category::volumetric, "volumetric", "volumetric", SceneBlocks::optional_one},
+    {Category::backend, "backend", "backend", SceneBlocks::optional_one}};
+
 std::string_view to_string(Category category);
 
 // For the compile-time check in MTLED_PLUGIN that a plugin's interface matches its CMake CATEGORY.
 constexpr Category category_from_literal(std::string_view text) {
-  if (text == "mesh") return Category::mesh;
-  if (text == "shape_function") return Category::shape_function;
-  if (text == "material") return Category::material;
-  if (text == "boundary") return Category::boundary;
-  if (text == "needle") return Category::needle;
-  if (text == "integrator") return Category::integrator;
-  if (text == "volumetric") return Category::volumetric;
-  if (text == "backend") return Category::backend;
+  for (const CategoryInfo& info : kPluginCategories)
+    if (info.name == text) return info.category;
   return Category::scene;
 }
 std::optional<Category> category_from_string(std::string_view text);
 const std::vector<Category>& plugin_categories();
+// The table's row of a plugin category (not Category::scene).
+const CategoryInfo& category_info(Category category);
 
 // `file`: a path (a string in the scene); a relative one is taken from the scene file's folder when the scene is
 // validated, which also checks that the file exists, so a component reads Parameters::file as an absolute path.
