@@ -65,7 +65,7 @@ double identity_miss(const std::string& name, double mesh_size) {
 }
 
 // Measured (docs/validation.md): the written stress misses the identity by 2.0% at 3 mm and 0.95% at 1.5 mm, a
-// discretisation error that falls with the spacing; the stress of each point's own F missed by 4.9% and 2.4%.
+// discretisation error that falls with the spacing.
 TEST(StressOutput, TheWrittenStressIntegratesToTheHeightTimesThePlatenForce) {
   const double coarse = identity_miss("coarse", 0.003), fine = identity_miss("fine", 0.0015);
   EXPECT_LT(fine, 0.012);
