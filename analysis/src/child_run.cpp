@@ -14,8 +14,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
-#include <string_view>
 #include <thread>
+
+#include "mtled/interfaces/process_group.hpp"
 
 namespace fs = std::filesystem;
 
@@ -32,14 +33,10 @@ RunOutcome run_child(const fs::path& executable, const std::vector<std::string>&
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
-  // A run is its own job: an MPI launcher's variables (a study spread over ranks) would make it join the study's.
+  // A run is its own job: a launcher's variables (a study spread over ranks) would make it join the study's.
   std::vector<char*> envp;
-  for (char** e = environ; *e != nullptr; ++e) {
-    const std::string_view entry(*e);
-    if (!entry.starts_with("OMPI_") && !entry.starts_with("PMIX_") && !entry.starts_with("PMI_") &&
-        !entry.starts_with("OPAL_"))
-      envp.push_back(*e);
-  }
+  for (char** e = environ; *e != nullptr; ++e)
+    if (!launcher_variable(*e)) envp.push_back(*e);
   envp.push_back(nullptr);
   const std::string log_path = log_file.string();
 

@@ -10,7 +10,7 @@
 #include "mtled/log.hpp"
 #include "mtled/simd.hpp"
 #include "mtled/version.hpp"
-#include "ranks.hpp"
+#include "processes.hpp"
 
 namespace {
 
@@ -192,7 +192,7 @@ int dispatch(Commands& c) {
 
 // Under mpirun, the commands other than run and study compute nothing that ranks could share.
 bool runs_on_these_ranks(const Commands& c) {
-  if (mtled::app::ranks().count == 1 || *c.run_cmd || *c.study_cmd) return true;
+  if (mtled::app::processes().size() == 1 || *c.run_cmd || *c.study_cmd) return true;
   mtled::log().error("this command runs on one process: run it without mpirun (`mtled run` and `mtled study` use "
                      "several ranks)");
   return false;
@@ -200,21 +200,15 @@ bool runs_on_these_ranks(const Commands& c) {
 
 // A rank's error: rank 0's as it is, the others' prefixed with their rank (a failure only one rank met names it).
 void report(const std::string& message) {
-  const auto& r = mtled::app::ranks();
-  if (r.rank == 0)
+  const mtled::ProcessGroup& group = mtled::app::processes();
+  if (group.rank() == 0)
     mtled::log().error("{}", message);
   else
-    mtled::log().error("rank {} of {}: {}", r.rank, r.count, message);
+    mtled::log().error("rank {} of {}: {}", group.rank(), group.size(), message);
 }
 
 int main(int argc, char** argv) {
   using namespace mtled;
-  try {
-    app::start_ranks(argc, argv);
-  } catch (const InputError& e) {
-    for (const auto& problem : e.problems()) log().error("{}", problem.format());
-    return 2;
-  }
   CLI::App cli{"mtled: meshless total Lagrangian explicit dynamics for needle insertion into soft tissue"};
   cli.set_version_flag("--version", MTLED_VERSION_STRING);
   cli.require_subcommand(1);
@@ -230,8 +224,14 @@ int main(int argc, char** argv) {
     const int code = cli.exit(e);
     return code == 0 ? 0 : 2;
   }
+  try {
+    app::join_processes(c.plugin_paths);
+  } catch (const InputError& e) {
+    for (const auto& problem : e.problems()) log().error("{}", problem.format());
+    return 2;
+  }
   // The other ranks say only what went wrong; rank 0 tells the run.
-  set_log_level(app::ranks().writes() ? c.log_level : "error");
+  set_log_level(app::processes().writes() ? c.log_level : "error");
   if (!runs_on_these_ranks(c)) return 2;
   c.run.scene.plugin_paths = c.validate.plugin_paths = c.mesh.scene.plugin_paths = c.study.plugin_paths = c.fit.plugin_paths =
       c.plugin_paths;
@@ -249,6 +249,6 @@ int main(int argc, char** argv) {
     report(e.what());
     return 1;
   }
-  if (code == 0 || code == 3) app::stop_ranks();  // every rank ends alike only then (ranks.hpp)
+  if (code == 0 || code == 3) app::processes().finish();  // every rank ends alike only then (process_group.hpp)
   return code;
 }

@@ -76,6 +76,7 @@ std::string example_scene_block(const ComponentDeclaration& d) {
   const std::string text = block.dump();
   if (d.category() == Category::scene) return text;
   const CategoryInfo& info = category_info(d.category());
+  if (info.blocks == SceneBlocks::none) return text;
   const bool list = info.blocks == SceneBlocks::list || info.blocks == SceneBlocks::non_empty_list;
   if (list) return fmt::format("\"{}\": [{}]", info.scene_key, text);
   return fmt::format("\"{}\": {}", info.scene_key, text);

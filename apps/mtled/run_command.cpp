@@ -1,26 +1,17 @@
-// mtled run: read and validate the scene, build the simulation with its monitors and writers, run it, and record the
-// outcome (summary.json last, so that it always says how the run ended).
+// mtled run: read and validate the scene (on a group of processes, for the group's backend), then run it: the process
+// that writes through a SceneRun (scene_run.hpp), the others as replicas that take part in every exchange.
 #include <omp.h>
 
 #include <atomic>
-#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <thread>
 
 #include "commands.hpp"
-#include "mtled/analysis/postprocess.hpp"
 #include "mtled/analysis/scene_sections.hpp"
-#include "mtled/io/image.hpp"
-#include "mtled/io/run_outputs.hpp"
-#include "mtled/log.hpp"
 #include "mtled/monitors/scene_monitors.hpp"
-#include "mtled/simd.hpp"
-#include "mtled/version.hpp"
-#include "progress.hpp"
-#include "ranks.hpp"
-
-namespace fs = std::filesystem;
+#include "processes.hpp"
+#include "scene_run.hpp"
 
 namespace mtled::app {
 
@@ -29,9 +20,6 @@ namespace {
 std::atomic<bool> interrupted{false};
 extern "C" void on_interrupt(int) { interrupted = true; }
 
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
 // --threads, else OMP_NUM_THREADS when set (the OpenMP convention), else every core.
 int thread_count(const RunOptions& options) {
   if (options.threads > 0) return options.threads;
@@ -39,185 +27,8 @@ int thread_count(const RunOptions& options) {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-// One `mtled run`: the output folder, its summary, the simulation and the writers the time loop drives.
-class SceneRun {
- public:
-  SceneRun(const RunOptions& options, const Scene& scene, PluginCatalog& catalog, Clock::time_point wall_start)
-      : wall_start_(wall_start),
-        scene_(scene),
-        catalog_(catalog),
-        plugin_paths_(options.scene.plugin_paths),
-        folder_(output_folder(options)),
-        summary_(folder_, {{"mtled_version", MTLED_VERSION_STRING},
-                           {"scene", fs::absolute(options.scene.scene).string()},
-                           {"overrides", options.scene.overrides},
-                           {"threads", threads_},
-                           {"simd", simd::current()}}) {}
-
-  int run(bool progress) {
-    try {
-      const auto setup_start = Clock::now();
-      simulation_ = std::make_unique<Simulation>(scene_, catalog_);
-      check_displacement_field();
-      folded_ = add_scene_monitors(*simulation_, scene_);
-      if (auto failure = injected_failure()) simulation_->loop().add_monitor(failure);
-      writers_ = add_scene_writers(*simulation_, scene_, folder_);
-      writers_.push_back(std::make_shared<ProgressWriter>(progress, interrupted));
-      simulation_->loop().add_monitor(writers_.back());
-      setup_time_ = seconds_since(setup_start);
-      summary_["backend"] = simulation_->system().backend();
-      log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time_,
-                 simulation_->system().unscaled_stable_time_step());
-      solve_start_ = Clock::now();
-      simulation_->loop().run();
-    } catch (const InstabilityError& e) {
-      return unstable(e);
-    } catch (const Interrupted&) {
-      return finish_without_result("interrupted", seconds_since(solve_start_), "");
-    } catch (const InputError& e) {
-      const InputError located = locate_problems(e, scene_.document);
-      finish_without_result("invalid_input", 0.0, located.what());
-      throw located;
-    } catch (const std::exception& e) {
-      finish_without_result("failed", 0.0, e.what());
-      throw;
-    }
-    return succeeded(seconds_since(solve_start_));
-  }
-
- private:
-  // Made before the summary: the folder, cleared of an earlier run's files, with the thread count set.
-  OutputFolder output_folder(const RunOptions& options) {
-    OutputFolder folder(options.output.empty() ? fs::path("out") / options.scene.scene.stem() : options.output);
-    folder.clear_previous_outputs();
-    threads_ = thread_count(options);
-    omp_set_num_threads(threads_);
-    return folder;
-  }
-
-  // What every outcome records: timings, memory, the plugins loaded, and the model, steps and monitors.
-  void record(double solve_time) {
-    summary_.record_resources(catalog_, setup_time_, solve_time, seconds_since(wall_start_));
-    if (simulation_) summary_.record_simulation(*simulation_, solve_time);
-  }
-
-  // status "unstable" with the diagnostic and the last state whose forces were admissible (never named result.vtu);
-  // the writers keep their history up to it. Exit 3.
-  int unstable(const InstabilityError& e) {
-    const StepRecord last = simulation_->system().last_step();
-    for (const auto& writer : writers_) writer->finish(last);
-    record(seconds_since(solve_start_));
-    const bool inverted = e.diagnostic().what == "inverted_material";
-    std::vector<CellField> folds;
-    if (folded_ && !folded_->per_tet.empty()) folds.push_back({"folded", 1, folded_->per_tet});
-    write_state(folder_, "last_good_state.vtu", simulation_->system().force_kernel(),
-                inverted ? simulation_->system().previous_displacement() : simulation_->system().displacement(),
-                scene_.section("output"), false, folds);
-    // An inverted point beside the needle: where, against the needle, and what the scene can still do about it.
-    Diagnostic diagnostic = e.diagnostic();
-    const auto needle =
-        simulation_->system().needle() ? std::optional(simulation_->system().needle()->status()) : std::nullopt;
-    if (inverted && needle && !diagnostic.coordinates.empty())
-      diagnostic.detail += fold_advice_at(scene_, *needle, diagnostic.coordinates.front());
-    summary_.record_instability(diagnostic, "last_good_state.vtu");
-    summary_.write();
-    log().error("{}", InstabilityError(diagnostic).what());
-    log().error("wrote {} with status \"unstable\"", (folder_.path() / "summary.json").string());
-    return 3;
-  }
-
-  int finish_without_result(const std::string& status, double solve_time, const std::string& error) {
-    record(solve_time);
-    summary_["status"] = status;
-    if (!error.empty()) summary_["error"] = error;
-    summary_.write();
-    if (status == "interrupted")
-      log().error("interrupted at step {}; {} says so", simulation_ ? simulation_->system().step() : 0,
-                  (folder_.path() / "summary.json").string());
-    return 1;
-  }
-
-  // The output section's displacement field needs an image with a frame and a mesh that records its own: checked
-  // before the run, not after it.
-  void check_displacement_field() const {
-    const auto like = scene_.section("output").optional_file("displacement_field_like");
-    if (!like) return;
-    if (simulation_->system().discretisation().mesh().coordinate_system.empty())
-      throw InputError("/output/displacement_field_like",
-                       "the mesh records no patient frame (LPS or RAS), so where it lies in the image is not known: "
-                       "mesh the image itself (a label_map mesh source records it), or leave this out and run mtled "
-                       "field with --frame after the run");
-    if (read_image(*like).space.empty())
-      throw InputError(like->string(), "space: the image names no patient frame (LPS or RAS)");
-  }
-
-  // The field on the output section's image, written next to result.vtu (mtled field's work).
-  void write_displacement_field() const {
-    const Parameters& output = scene_.section("output");
-    const auto like = output.optional_file("displacement_field_like");
-    if (!like) return;
-    FieldOptions field;
-    field.run = folder_.path();
-    field.like = *like;
-    field.output = folder_.path() / (output.string("displacement_field_format") == "nifti" ? "displacement_field.nii.gz"
-                                                                                           : "displacement_field.nrrd");
-    field.direction = output.string("displacement_field_direction");
-    field.frame = simulation_->system().discretisation().mesh().coordinate_system;
-    field.decay_mm = 1e3 * output.number("displacement_field_decay");
-    field_command(field, plugin_paths_);
-  }
-
-  // result.vtu (and the displacement field the output section asks for), then summary.json with status "ok": the
-  // needle, the reactions and the error indicators.
-  int succeeded(double solve_time) {
-    const auto u = write_state(folder_, "result.vtu", simulation_->system().force_kernel(),
-                               simulation_->system().displacement(), scene_.section("output"), true);
-    try {
-      write_displacement_field();
-    } catch (const InputError& e) {
-      finish_without_result("invalid_input", solve_time, e.what());
-      throw;
-    }
-    record(solve_time);
-    summary_.record_result(*simulation_, u);
-    summary_["error_indicators"] = error_indicators(*simulation_);
-    summary_["status"] = "ok";
-    summary_.write();
-    log().info("done: {} steps, solve {:.2f} s, {:.3g} integration-point updates/s; results in {}",
-               simulation_->system().step(), solve_time, summary_["ip_updates_per_s"].get<double>(),
-               folder_.path().string());
-    return 0;
-  }
-
-  const Clock::time_point wall_start_;  // before the scene was read
-  const Scene& scene_;
-  PluginCatalog& catalog_;
-  const std::vector<fs::path> plugin_paths_;
-  int threads_ = 1;
-  const OutputFolder folder_;
-  RunSummary summary_;
-  Clock::time_point solve_start_ = Clock::now();
-  double setup_time_ = 0.0;
-  std::unique_ptr<Simulation> simulation_;
-  std::shared_ptr<const FoldedTets> folded_;  // marked by the inversion check when it stops the run
-  std::vector<std::shared_ptr<OutputWriter>> writers_;
-};
-
-// On several ranks the scene runs on the mpi backend; a scene that names another cannot.
-void choose_rank_backend(SceneDocument& document) {
-  if (ranks().count == 1) return;
-  json& root = document.root;
-  if (root.contains("backend") && root["backend"].is_object() && root["backend"].value("type", "") != "mpi")
-    throw InputError(document.locate("/backend/type"),
-                     fmt::format("the {} backend runs on one process, and this run has {} ranks: run without "
-                                 "mpirun, or leave out /backend (and --backend) to run on the ranks",
-                                 root["backend"].value("type", "?"), ranks().count));
-  root["backend"] = {{"type", "mpi"}};
-}
-
 // A rank other than 0: the same simulation and checks, which take part in every exchange of forces; no files.
-int replica_run(const RunOptions& options, const Scene& scene, PluginCatalog& catalog) {
-  omp_set_num_threads(thread_count(options));
+int replica_run(const Scene& scene, PluginCatalog& catalog) {
   Simulation simulation(scene, catalog);
   add_scene_monitors(simulation, scene);
   if (auto failure = injected_failure()) simulation.loop().add_monitor(failure);
@@ -232,18 +43,20 @@ int replica_run(const RunOptions& options, const Scene& scene, PluginCatalog& ca
 }  // namespace
 
 int run_scene(const RunOptions& options) {
-  const auto wall_start = Clock::now();
+  const auto wall_start = SceneRun::Clock::now();
   SceneDocument document = read_scene(options.scene.scene, options.scene.overrides);
-  choose_rank_backend(document);
+  run_across(document, processes());
   PluginCatalog catalog(plugin_search_path(options.scene.plugin_paths, scene_plugin_paths(document)));
   const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
   // On every rank: under mpirun Ctrl-C reaches each rank, and the others keep computing until rank 0 has finished
   // its step and written "interrupted" (then the launcher ends them).
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
-  if (!ranks().writes()) return replica_run(options, scene, catalog);
-  SceneRun run(options, scene, catalog, wall_start);
-  return run.run(options.progress);
+  const int threads = thread_count(options);
+  omp_set_num_threads(threads);
+  if (!processes().writes()) return replica_run(scene, catalog);
+  SceneRun run(options, scene, catalog, threads, wall_start);
+  return run.run(options.progress, interrupted);
 }
 
 }  // namespace mtled::app

@@ -13,7 +13,7 @@
 #include "mtled/analysis/study.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/log.hpp"
-#include "ranks.hpp"
+#include "processes.hpp"
 
 namespace mtled::app {
 
@@ -50,17 +50,17 @@ int write_job_list(const study::Study& plan, const study::Runner& runner, const 
 
 // Every rank executes the configurations i with i mod ranks = its rank; rank 0 gets every outcome.
 std::vector<study::RunOutcome> execute_shares(const study::Study& plan, study::Runner& runner) {
-  const Ranks& r = ranks();
+  ProcessGroup& group = processes();
   const std::size_t n = plan.configurations.size();
   constexpr std::size_t kFields = 6;
   std::vector<double> packed(kFields * n, 0.0);
-  for (std::size_t i = static_cast<std::size_t>(r.rank); i < n; i += static_cast<std::size_t>(r.count)) {
+  for (std::size_t i = static_cast<std::size_t>(group.rank()); i < n; i += static_cast<std::size_t>(group.size())) {
     const study::RunOutcome o = runner.execute(plan.configurations[i], counter(i, n));
     const double fields[kFields] = {o.reused ? 1.0 : 0.0, static_cast<double>(o.exit_code), static_cast<double>(o.signal),
                                     o.timed_out ? 1.0 : 0.0, o.elapsed_s, o.max_rss_mb};
     std::copy(fields, fields + kFields, packed.begin() + static_cast<std::ptrdiff_t>(kFields * i));
   }
-  sum_on_first_rank(packed);  // each entry is one rank's alone: the sum gathers them
+  group.sum_on_first(packed);  // each entry is one rank's alone: the sum gathers them
   std::vector<study::RunOutcome> outcomes(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double* f = packed.data() + kFields * i;
@@ -76,26 +76,26 @@ int study_command(const StudyOptions& options) {
   study::check_scenes(plan, options.plugin_paths);
   const study::Settings settings{options.plugin_paths, options.threads, options.reuse, options.log_level, options.gather};
   study::Runner runner(plan, settings, options.output);
-  if (!options.job_list.empty()) return ranks().writes() ? write_job_list(plan, runner, options.job_list) : 0;
-  if (options.gather && ranks().count > 1)
+  if (!options.job_list.empty()) return processes().writes() ? write_job_list(plan, runner, options.job_list) : 0;
+  if (options.gather && processes().size() > 1)
     throw InputError("--gather", "gathering reads files and runs nothing: run it without mpirun");
   const auto start = std::chrono::steady_clock::now();
 
   // Rank 0 makes the folder and runs the reference; the others start their shares when it is there.
   std::unique_ptr<OutputFolder> out;
   study::ReferenceResult reference;
-  if (ranks().writes()) {
+  if (processes().writes()) {
     out = std::make_unique<OutputFolder>(options.output);
     std::filesystem::create_directories(out->path() / "runs");
     reference = study::establish_reference(plan, runner);
   }
-  wait_for_all_ranks();
+  processes().barrier();
   std::vector<study::RunOutcome> outcomes;
   if (options.gather)
     for (const auto& c : plan.configurations) outcomes.push_back(runner.outcome_from_folder(c));
   else
     outcomes = execute_shares(plan, runner);
-  if (!ranks().writes()) return 0;
+  if (!processes().writes()) return 0;
 
   const study::Measure measure(plan, reference, options.plugin_paths);
   std::vector<study::Row> rows;

@@ -396,7 +396,8 @@ struct Validator {
 const std::vector<std::string>& kernel_keys() {
   static const std::vector<std::string> keys = [] {
     std::vector<std::string> all = {"$schema", "description", "plugin_paths"};
-    for (const CategoryInfo& info : kPluginCategories) all.emplace_back(info.scene_key);
+    for (const CategoryInfo& info : kPluginCategories)
+      if (info.blocks != SceneBlocks::none) all.emplace_back(info.scene_key);
     all.emplace_back("discretisation");
     return all;
   }();
@@ -546,6 +547,7 @@ json scene_json_schema(PluginCatalog& catalog, const std::vector<SceneSection>& 
                      {"discretisation", section_schema(discretisation_declaration())}};
   json required = json::array();
   for (const CategoryInfo& info : kPluginCategories) {
+    if (info.blocks == SceneBlocks::none) continue;
     json& schema = properties[std::string(info.scene_key)];
     switch (info.blocks) {
       case SceneBlocks::one:
@@ -559,6 +561,8 @@ json scene_json_schema(PluginCatalog& catalog, const std::vector<SceneSection>& 
         break;
       case SceneBlocks::non_empty_list:
         schema = {{"type", "array"}, {"minItems", 1}, {"items", one_of(info.category)}};
+        break;
+      case SceneBlocks::none:
         break;
     }
     if (info.blocks == SceneBlocks::one || info.blocks == SceneBlocks::non_empty_list)

@@ -245,7 +245,7 @@ TEST(MpiBackend, AnotherBackendOnSeveralRanksIsRefused) {
   const auto result = test::run_mtled({"run", cube_scene().string(), "-o", out.string(), "--backend", "cpu"},
                                       kEnvironment, launcher(2));
   EXPECT_EQ(result.exit_code, 2) << result.output;
-  EXPECT_NE(result.output.find("the cpu backend runs on one process, and this run has 2 ranks"), std::string::npos)
+  EXPECT_NE(result.output.find("the cpu backend runs on one process, and this run has 2 processes"), std::string::npos)
       << result.output;
 }
 

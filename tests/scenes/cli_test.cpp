@@ -126,6 +126,26 @@ TEST(Cli, TheBackendIsChosenByNameAndAMissingOneSaysHowToRunOnTheCpu) {
   EXPECT_FALSE(fs::exists(folder / "cuda" / "result.vtu"));
 }
 
+// A process that a launcher started among several joins their group through the process_group plugin. Where none is
+// on the plugin path it stops before the scene is read (exit 2, nothing written): each process would otherwise run the
+// whole scene into the same folder. Without a launcher's variables mtled never looks for one (the same empty plugin
+// path then fails on the scene's own plugins).
+TEST(Cli, SeveralLaunchedProcessesWithoutAProcessGroupPluginStopAtOnce) {
+  const fs::path folder = test::scratch_dir("cli-no-process-group");
+  const fs::path no_plugins = folder / "no-plugins";
+  fs::create_directories(no_plugins);
+  const std::vector<std::string> run = {"run", kSmallCube.string(), "-o", (folder / "run").string(), "--no-progress"};
+  const auto launched = test::run_mtled(run, {"OMPI_COMM_WORLD_SIZE=2", "MTLED_PLUGIN_PATH=" + no_plugins.string()});
+  EXPECT_EQ(launched.exit_code, 2) << launched.output;
+  expect_contains(launched.output, "mpirun");
+  expect_contains(launched.output, "no process_group plugin");
+  EXPECT_FALSE(fs::exists(folder / "run"));
+  const auto alone = test::run_mtled(run, {"MTLED_PLUGIN_PATH=" + no_plugins.string()});
+  EXPECT_EQ(alone.exit_code, 2) << alone.output;
+  EXPECT_EQ(alone.output.find("process_group"), std::string::npos) << alone.output;
+  expect_contains(alone.output, "/materials/0/type");
+}
+
 TEST(Cli, ValidatePlugins_AndSchemaWork) {
   auto result = test::run_mtled({"validate", kSmallCube.string()});
   EXPECT_EQ(result.exit_code, 0) << result.output;

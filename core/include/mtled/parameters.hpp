@@ -19,16 +19,29 @@ namespace mtled {
 struct NodeSelector;  // node_selector.hpp: what Parameters::node_set returns
 
 // What a component is for. Each category has its own interface in mtled/interfaces/ and its own place in
-// a scene. `scene` is the kernel's own sections (discretisation, output).
-enum class Category { mesh, shape_function, material, boundary, needle, integrator, volumetric, backend, scene };
+// a scene (or none: a process group is the launcher's, not the scene's). `scene` is the kernel's own sections
+// (discretisation, output).
+enum class Category {
+  mesh,
+  shape_function,
+  material,
+  boundary,
+  needle,
+  integrator,
+  volumetric,
+  backend,
+  process_group,
+  scene
+};
 
-// How many blocks of a category a scene holds under its key.
-enum class SceneBlocks { one, optional_one, list, non_empty_list };
+// How many blocks of a category a scene holds under its key; `none`: the category has no place in a scene.
+enum class SceneBlocks { one, optional_one, list, non_empty_list, none };
 
 // Every plugin category, once: its name (the CMake CATEGORY, and <category> in the plugin file names
 // mtled-<category>-<type>.so), the scene key its blocks go under, and how many. Scene validation, the scene's JSON
-// schema, the plugin catalog and `mtled plugins` read this table; a new category is a row here, its interface, and the
-// Scene member it is read into.
+// schema, the plugin catalog, CMake's mtled_add_plugin (through MTLED_PLUGIN's check) and `mtled plugins` read this
+// table; a new category is a row here, its interface (mtled/interfaces/), its factory type in the Registry, and the
+// Scene member it is read into (if it has a scene key).
 struct CategoryInfo {
   Category category;
   std::string_view name;
@@ -43,7 +56,8 @@ inline constexpr CategoryInfo kPluginCategories[] = {
     {Category::needle, "needle", "needle", SceneBlocks::optional_one},
     {Category::integrator, "integrator", "integrator", SceneBlocks::one},
     {Category::volumetric, "volumetric", "volumetric", SceneBlocks::optional_one},
-    {Category::backend, "backend", "backend", SceneBlocks::optional_one}};
+    {Category::backend, "backend", "backend", SceneBlocks::optional_one},
+    {Category::process_group, "process_group", "", SceneBlocks::none}};
 
 std::string_view to_string(Category category);
 

@@ -14,6 +14,7 @@
 #include "mtled/interfaces/integrator.hpp"
 #include "mtled/interfaces/material.hpp"
 #include "mtled/interfaces/mesh_source.hpp"
+#include "mtled/interfaces/process_group.hpp"
 #include "mtled/interfaces/shape_functions.hpp"
 #include "mtled/interfaces/volumetric_treatment.hpp"
 #include "mtled/parameters.hpp"
@@ -51,7 +52,7 @@ class Registry {
  private:
   using AnyFactory = std::variant<Factory<MeshSource>, Factory<ShapeFunctions>, Factory<Material>,
                                   Factory<BoundaryCondition>, Factory<NeedleModel>, Factory<TimeIntegrator>,
-                                  Factory<VolumetricTreatment>, Factory<StepEngine>>;
+                                  Factory<VolumetricTreatment>, Factory<StepEngine>, Factory<ProcessGroup>>;
   struct Entry {
     ComponentDeclaration declaration;
     AnyFactory factory;

@@ -1,13 +1,14 @@
-// `mpi`: one scene on the processes of an MPI run (mpirun -np N mtled run SCENE; the command line selects this
-// backend when it runs on more than one rank). The background cells are partitioned by METIS (the tets' dual graph,
-// faces shared); each rank computes the internal forces of its cells' integration points on its threads, sends its
-// contributions to the nodes other ranks own (the points at the partition boundary first, the interior computed
-// while those travel) and sums those it receives for its own nodes in rank order. It then updates its own nodes: the
-// prediction, its part of the constraint projection's products and the step's sums, each global value reduced in rank
-// order so that every rank holds the same bits; last, it receives the new displacements of its ghost nodes (those
-// its forces read that other ranks own). The drivers' reads are gathered before they update (the nodes they name, or
-// all), and the whole displacement on the steps a monitor on some rank reads it. The constraint solve, the drivers
-// and the monitors run on every rank on the same values, and only rank 0 writes. docs/mpi.md gives the design, its
+// `mpi`: one scene on the processes of an MPI run (mpirun -np N mtled run SCENE; the mpi process group,
+// process_group.cpp, selects this backend when it has more than one rank). The background cells are partitioned by
+// METIS (the tets' dual graph, faces shared); each rank computes the internal forces of its cells' integration points
+// on its threads, sends its contributions to the nodes other ranks own (the points at the partition boundary first, the
+// interior computed while those travel) and sums those it receives for its own nodes in rank order. It then updates its
+// own nodes: the prediction, its part of the constraint projection's products and the step's sums, each global value
+// reduced in rank order so that every rank holds the same bits; last, it receives the new displacements of its ghost
+// nodes (those its forces read that other ranks own). The drivers' reads are gathered before they update (the nodes
+// they name, or all), and the whole displacement on the steps a monitor on some rank reads it. The constraint solve,
+// the drivers and the monitors run on every rank on the same values, and only rank 0 writes. The engine holds the CPU
+// engine's pieces (HostState, ForceEvaluationClock) rather than deriving from it. docs/mpi.md gives the design, its
 // costs and what it does not distribute yet.
 #include <mpi.h>
 
@@ -44,11 +45,11 @@ std::vector<std::int64_t> all_ranks(std::int64_t value, int ranks) {
 
 }  // namespace
 
-class MpiBackend final : public CpuEngine {
+class MpiBackend final : public StepEngine {
  public:
   static void declare(ComponentDeclaration& d) {
     d.summary(
-        "The processes of an MPI run (mpirun -np N mtled run SCENE, chosen by the command line on more than one "
+        "The processes of an MPI run (mpirun -np N mtled run SCENE; the mpi process group chooses it on more than one "
         "rank): METIS partitions the background cells, each rank computes its cells' integration points on its "
         "threads (--threads per rank) and the ranks exchange their contributions to each other's nodes every force "
         "evaluation; each rank updates its own nodes and receives its ghost nodes' new displacements; the constraint "
@@ -85,8 +86,9 @@ class MpiBackend final : public CpuEngine {
   }
 
   void setup(const ForceKernel& kernel) override {
-    CpuEngine::setup(kernel);
+    kernel_ = &kernel;
     const Discretisation& model = kernel.discretisation();
+    state_.size_for(model.node_count());
     // A volumetric treatment that sums over ranges of points computes its own points' contributions (their averages
     // reach a few layers of other ranks' points, which it evaluates too); one that does not is computed whole on
     // every rank (the same answer, no speed-up).
@@ -108,11 +110,9 @@ class MpiBackend final : public CpuEngine {
   }
 
   json describe() const override {
-    json out = CpuEngine::describe();
-    out["type"] = "mpi";
-    out["ranks"] = ranks_;
-    out["threads_per_rank"] = out["threads"];
-    out.erase("threads");
+    json out = {{"type", "mpi"}, {"ranks", ranks_}, {"threads_per_rank", kernel_->discretisation().team().size()}};
+    clock_.describe(*kernel_, out);
+    out["update_s"] = update_s_;
     out["partition"] = partition_;
     if (whole_on_every_rank_) out["forces"] = "whole on every rank (volumetric treatment)";
     out["exchange_s"] = exchange_s_;  // rank 0's: sends, receives, its sums, the gathers and the step's reductions
@@ -120,16 +120,20 @@ class MpiBackend final : public CpuEngine {
     return out;
   }
 
-  // The step on this rank's own nodes (CpuEngine's state: u_ and u_previous_ hold every node, the other vectors are
-  // right at the rank's own nodes only).
+  void set_mass(std::span<const double> mass) override { state_.mass.assign(mass.begin(), mass.end()); }
+  void set_prediction(std::span<const double> u) override { state_.set_prediction(u); }
+
+  // The step on this rank's own nodes (state_.u and state_.u_previous hold every node, the other vectors are right at
+  // the rank's own nodes only).
   Index evaluate_forces(IncrementSums* sums) override {
-    f_previous_.swap(f_);
-    const std::int64_t bad = timed([&] { return owned_forces(u_, f_); });
+    state_.f_previous.swap(state_.f);
+    const std::int64_t bad = clock_.timed([&] { return owned_forces(state_.u, state_.f); });
     IncrementSums mine;
+    const HostState& s = state_;
     if (sums != nullptr)
       for (const Index i : owned_)
         for (std::size_t d = 3 * static_cast<std::size_t>(i); d < 3 * static_cast<std::size_t>(i) + 3; ++d)
-          add_increment_sums(d, u_, u_previous_, f_, f_previous_, mass_, mine);
+          add_increment_sums(d, s.u, s.u_previous, s.f, s.f_previous, s.mass, mine);
     // One exchange for both: the first inadmissible point (an index, exact as a double) and the sums.
     const auto start = Clock::now();
     const double values[] = {static_cast<double>(bad), mine.stiffness, mine.inertia};
@@ -155,20 +159,16 @@ class MpiBackend final : public CpuEngine {
     std::int64_t first_bad = kNoneIndex;
     for (const Index node : owned_) {
       const auto i = static_cast<std::size_t>(node);
-      explicit_update(u_.data(), u_previous_.data(), external, f_.data(), f_previous_.data(), mass_.data(), update,
-                      prediction_.data(), i, i + 1);
-      for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
-        free_[d] = prediction_[d];
-        if (!std::isfinite(prediction_[d])) first_bad = std::min(first_bad, static_cast<std::int64_t>(d));
-      }
+      const std::int64_t bad = state_.predict(update, external, i, i + 1);
+      if (bad >= 0) first_bad = std::min(first_bad, bad);
     }
     MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
     return first_bad == kNoneIndex ? -1 : first_bad;
   }
 
   void prediction(std::span<double> out) override {
-    gather_owned(prediction_);
-    std::copy(prediction_.begin(), prediction_.end(), out.begin());
+    gather_owned(state_.prediction);
+    std::copy(state_.prediction.begin(), state_.prediction.end(), out.begin());
   }
 
   // out = Phi u~: each rank's rows summed over the entries at its own nodes, the ranks' sums added in rank order.
@@ -182,7 +182,7 @@ class MpiBackend final : public CpuEngine {
       double sum[3] = {0.0, 0.0, 0.0};
       for (std::int64_t i = own.row_offsets[r]; i < own.row_offsets[r + 1]; ++i) {
         const std::int64_t e = own.row_entries[static_cast<std::size_t>(i)];
-        const double* v = &prediction_[3 * static_cast<std::size_t>(block.row_nodes[e])];
+        const double* v = &state_.prediction[3 * static_cast<std::size_t>(block.row_nodes[e])];
         for (std::size_t j = 0; j < k; ++j) sum[j] += block.row_values[e] * v[block.components[j]];
       }
       for (std::size_t j = 0; j < k; ++j) mine[k * r + j] = sum[j];
@@ -201,7 +201,7 @@ class MpiBackend final : public CpuEngine {
       for (std::int64_t e = block.node_offsets[n]; e < block.node_offsets[n + 1]; ++e)
         for (std::size_t j = 0; j < k; ++j)
           sum[j] += block.node_values[e] * y[k * static_cast<std::size_t>(block.node_rows[e]) + j];
-      double* v = &prediction_[3 * static_cast<std::size_t>(block.nodes[n])];
+      double* v = &state_.prediction[3 * static_cast<std::size_t>(block.nodes[n])];
       for (std::size_t j = 0; j < k; ++j) v[block.components[j]] += sum[j];
     }
   }
@@ -212,11 +212,8 @@ class MpiBackend final : public CpuEngine {
     const ScopeTimer timer(update_s_);
     StepSums mine;
     double fastest = 0.0;
-    for (const Index node : owned_)
-      add_step_sums(static_cast<std::size_t>(node), u_.data(), u_previous_.data(), prediction_.data(), free_.data(),
-                    mass_.data(), beta, mine, fastest);
-    u_previous_.swap(u_);
-    u_.swap(prediction_);
+    for (const Index node : owned_) state_.add_step_sums(static_cast<std::size_t>(node), beta, mine, fastest);
+    state_.advance();
     previous_whole_ = whole_;
     whole_ = false;
     // The sums and whether this rank's monitors read the whole displacement: one exchange.
@@ -247,7 +244,7 @@ class MpiBackend final : public CpuEngine {
   }
 
   void set_state(std::span<const double> u, std::span<const double> u_previous) override {
-    CpuEngine::set_state(u, u_previous);
+    state_.set_state(u, u_previous);
     whole_ = previous_whole_ = true;
   }
 
@@ -258,21 +255,33 @@ class MpiBackend final : public CpuEngine {
       gather_whole_displacement();
       exchange_s_ += seconds_since(start);
     }
-    return u_;
+    return state_.u;
   }
   std::span<const double> previous_displacement() override {
     if (!previous_whole_) {
-      gather_owned(u_previous_);
+      gather_owned(state_.u_previous);
       previous_whole_ = true;
     }
-    return u_previous_;
+    return state_.u_previous;
   }
 
   bool spreads_nodes() const override { return true; }
 
+  // f at every node (the monitors' evaluations on host vectors): this rank's own sums, then gathered.
+  Index internal_forces(std::span<const double> u, std::span<double> f) override {
+    return clock_.timed([&] {
+      std::int64_t first_bad = owned_forces(u, f);
+      const auto start = Clock::now();
+      MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
+      gather_owned(f);
+      exchange_s_ += seconds_since(start);
+      return first_bad == kNoneIndex ? Index{-1} : static_cast<Index>(first_bad);
+    });
+  }
+
   // u_n at `nodes` (the same list on every rank): each rank's own among them, gathered in list order.
   std::span<const double> displacement_at(std::span<const Index> nodes) override {
-    if (whole_ || nodes.empty()) return u_;
+    if (whole_ || nodes.empty()) return state_.u;
     const auto start = Clock::now();
     subset_counts_.assign(static_cast<std::size_t>(ranks_), 0);
     std::size_t packed = 0;
@@ -280,7 +289,7 @@ class MpiBackend final : public CpuEngine {
       const int q = owner_[static_cast<std::size_t>(n)];
       subset_counts_[static_cast<std::size_t>(q)] += 3;
       if (q != rank_) continue;
-      for (std::size_t c = 0; c < 3; ++c) owned_sum_[packed++] = u_[3 * static_cast<std::size_t>(n) + c];
+      for (std::size_t c = 0; c < 3; ++c) owned_sum_[packed++] = state_.u[3 * static_cast<std::size_t>(n) + c];
     }
     subset_offsets_.assign(static_cast<std::size_t>(ranks_), 0);
     std::partial_sum(subset_counts_.begin(), subset_counts_.end() - 1, subset_offsets_.begin() + 1);
@@ -288,23 +297,13 @@ class MpiBackend final : public CpuEngine {
                    subset_offsets_.data(), MPI_DOUBLE, MPI_COMM_WORLD);
     for (const Index n : nodes) {  // each rank's values in list order
       int& next = subset_offsets_[static_cast<std::size_t>(owner_[static_cast<std::size_t>(n)])];
-      for (std::size_t c = 0; c < 3; ++c) u_[3 * static_cast<std::size_t>(n) + c] = gathered_[static_cast<std::size_t>(next) + c];
+      for (std::size_t c = 0; c < 3; ++c)
+        state_.u[3 * static_cast<std::size_t>(n) + c] = gathered_[static_cast<std::size_t>(next) + c];
       next += 3;
     }
     driver_nodes_gathered_ += static_cast<std::int64_t>(nodes.size());
     exchange_s_ += seconds_since(start);
-    return u_;
-  }
-
- protected:
-  // f at every node (the monitors' evaluations on host vectors): this rank's own sums, then gathered.
-  Index forces(std::span<const double> u, std::span<double> f) override {
-    std::int64_t first_bad = owned_forces(u, f);
-    const auto start = Clock::now();
-    MPI_Allreduce(MPI_IN_PLACE, &first_bad, 1, MPI_INT64_T, MPI_MIN, MPI_COMM_WORLD);
-    gather_owned(f);
-    exchange_s_ += seconds_since(start);
-    return first_bad == kNoneIndex ? -1 : static_cast<Index>(first_bad);
+    return state_.u;
   }
 
  private:
@@ -318,17 +317,17 @@ class MpiBackend final : public CpuEngine {
       if (bad >= 0) first_bad = std::min<std::int64_t>(first_bad, bad);
     };
     if (whole_on_every_rank_) {
-      note(kernel().internal_forces(u, f));
+      note(kernel_->internal_forces(u, f));
       return first_bad;
     }
     auto start = Clock::now();
     post_receives(forces_.my_values, kForceTag);
     exchange_s_ += seconds_since(start);
-    note(kernel().internal_forces(u, boundary_f_, boundary_ranges_));
+    note(kernel_->internal_forces(u, boundary_f_, boundary_ranges_));
     start = Clock::now();
     send_values(forces_.theirs, forces_.their_values, boundary_f_, kForceTag);
     exchange_s_ += seconds_since(start);
-    note(kernel().internal_forces(u, f, interior_ranges_, progress_));
+    note(kernel_->internal_forces(u, f, interior_ranges_, progress_));
     start = Clock::now();
     MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
     sum_owned(f);
@@ -570,22 +569,22 @@ class MpiBackend final : public CpuEngine {
       for (std::size_t c = 0; c < 3; ++c) v[3 * static_cast<std::size_t>(gather_order_[k]) + c] = gathered_[3 * k + c];
   }
 
-  // u_ right at the ghost nodes as well: each rank sends its own nodes' values to the ranks whose forces read them.
+  // u_n right at the ghost nodes as well: each rank sends its own nodes' values to the ranks whose forces read them.
   void exchange_ghosts() {
     post_receives(ghosts_.their_values, kGhostTag);
-    send_values(ghosts_.mine, ghosts_.my_values, u_, kGhostTag);
+    send_values(ghosts_.mine, ghosts_.my_values, state_.u, kGhostTag);
     MPI_Waitall(static_cast<int>(requests_.size()), requests_.data(), MPI_STATUSES_IGNORE);
     for (std::size_t q = 0; q < static_cast<std::size_t>(ranks_); ++q) {
       const auto& list = ghosts_.theirs[q];
       const auto& in = ghosts_.their_values[q];
       for (std::size_t k = 0; k < list.size(); ++k)
-        for (std::size_t c = 0; c < 3; ++c) u_[3 * static_cast<std::size_t>(list[k]) + c] = in[3 * k + c];
+        for (std::size_t c = 0; c < 3; ++c) state_.u[3 * static_cast<std::size_t>(list[k]) + c] = in[3 * k + c];
     }
   }
 
-  // u_ right at every node (the monitors' steps, the drivers that do not say what they read, the run's end).
+  // u_n right at every node (the monitors' steps, the drivers that do not say what they read, the run's end).
   void gather_whole_displacement() {
-    gather_owned(u_);
+    gather_owned(state_.u);
     whole_ = true;
     ++whole_gathers_;
   }
@@ -619,6 +618,11 @@ class MpiBackend final : public CpuEngine {
                   {"whole_gather_bytes", 24 * model.node_count() * (ranks_ - 1)}};
   }
 
+  const ForceKernel* kernel_ = nullptr;
+  HostState state_;  // the CPU engine's pieces: the state in host memory, its per-node work, the force clock
+  ForceEvaluationClock clock_;
+  double update_s_ = 0.0;  // as CpuEngine's "update_s": the rank's per-node work and constraint products
+
   static constexpr int kStepValues = 8;  // StepSums, the fastest node's energy and the whole-gather flag, as doubles
   static constexpr int kForceTag = 0, kGhostTag = 1;
   static constexpr std::int64_t kNoneIndex = std::numeric_limits<std::int64_t>::max();
@@ -647,7 +651,7 @@ class MpiBackend final : public CpuEngine {
   };
   json partition_;
   bool whole_on_every_rank_ = false;
-  bool whole_ = true, previous_whole_ = true;  // u_ (u_previous_) right at every node, not only own and ghost ones
+  bool whole_ = true, previous_whole_ = true;  // u_n (u_(n-1)) right at every node, not only own and ghost ones
   std::int64_t whole_gathers_ = 0, driver_nodes_gathered_ = 0;
   double exchange_s_ = 0.0;
 };
