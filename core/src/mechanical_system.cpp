@@ -10,6 +10,10 @@
 #include "component_build.hpp"
 #include "mtled/cpu_engine.hpp"
 #include "mtled/instability.hpp"
+#include "mtled/interfaces/material.hpp"
+#include "mtled/interfaces/mesh_source.hpp"
+#include "mtled/interfaces/shape_functions.hpp"
+#include "mtled/interfaces/volumetric_treatment.hpp"
 #include "mtled/log.hpp"
 
 namespace mtled {

@@ -225,4 +225,18 @@ nlohmann::json NodeSelector::json_schema() {
             shape("sphere", object({{"center", vec}, {"radius", length}}, {"center", "radius"}))}}};
 }
 
+ValueSyntax NodeSelector::syntax() {
+  return {[](const nlohmann::json& value, const std::string& where, std::vector<Problem>& problems) {
+            return parse(value, where, problems).has_value();
+          },
+          json_schema()};
+}
+
+NodeSelector NodeSelector::from(const Parameters& parameters, std::string_view name) {
+  std::vector<Problem> problems;
+  auto selector = parse(parameters.values().at(std::string(name)), parameters.pointer(name), problems);
+  if (!selector) throw InputError(std::move(problems));
+  return *selector;
+}
+
 }  // namespace mtled

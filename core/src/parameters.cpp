@@ -1,7 +1,5 @@
 #include "mtled/parameters.hpp"
 
-#include "mtled/node_selector.hpp"
-
 #include <fmt/format.h>
 
 #include <cmath>
@@ -144,7 +142,9 @@ json ParameterSpec::to_json_schema() const {
       break;
     }
     case ParameterType::string_list: s = {{"type", "array"}, {"items", {{"type", "string"}}}}; break;
-    case ParameterType::node_set: s = NodeSelector::json_schema(); break;
+    case ParameterType::node_set:
+      s = syntax.schema;
+      break;
   }
   if (!choices.empty()) {
     if (type == ParameterType::string_list) {
@@ -239,8 +239,10 @@ ParameterBuilder ComponentDeclaration::number_map(std::string name) {
 ParameterBuilder ComponentDeclaration::string_list(std::string name) {
   return add_new(std::move(name), ParameterType::string_list).unit("1");
 }
-ParameterBuilder ComponentDeclaration::node_set(std::string name) {
-  return add_new(std::move(name), ParameterType::node_set).unit("1");
+ParameterBuilder ComponentDeclaration::node_set(std::string name, ValueSyntax syntax) {
+  ParameterBuilder builder = add_new(std::move(name), ParameterType::node_set).unit("1");
+  parameters_.back().syntax = std::move(syntax);
+  return builder;
 }
 ParameterBuilder ComponentDeclaration::file(std::string name) {
   return add_new(std::move(name), ParameterType::file).unit("1");
@@ -320,12 +322,6 @@ std::map<std::string, double> Parameters::number_map(std::string_view name) cons
 }
 std::vector<std::string> Parameters::string_list(std::string_view name) const {
   return value(name, ParameterType::string_list).get<std::vector<std::string>>();
-}
-NodeSelector Parameters::node_set(std::string_view name) const {
-  std::vector<Problem> problems;
-  auto selector = NodeSelector::parse(value(name, ParameterType::node_set), pointer(name), problems);
-  if (!selector) throw InputError(std::move(problems));
-  return *selector;
 }
 std::optional<double> Parameters::optional_number(std::string_view name) const {
   if (!has(name)) return std::nullopt;
@@ -505,7 +501,7 @@ bool check_value(const ParameterSpec& spec, const json& v, const std::string& wh
       if (!v.is_array()) return wrong_type("a list of strings");
       return check_string_list(spec, v, where, problems);
     case ParameterType::node_set:
-      return NodeSelector::parse(v, where, problems).has_value();
+      return spec.syntax.check(v, where, problems);
   }
   return false;
 }

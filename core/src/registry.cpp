@@ -36,7 +36,7 @@ void Registry::check_category(const ComponentDeclaration& declaration, Category 
   }
 }
 
-void Registry::add_entry(ComponentDeclaration declaration, AnyFactory factory) {
+void Registry::add_entry(ComponentDeclaration declaration, std::any factory) {
   // The kernel's own per-category parameters join the component's declaration, so that validation, the
   // schema and the docs all see one list.
   ComponentDeclaration full = std::move(declaration);

@@ -4,6 +4,7 @@
 // law with mu = 2 C10. The initial shear modulus is 2 (C10 + C01) and the bulk modulus 2/D.
 #include <cmath>
 
+#include "mtled/interfaces/material.hpp"
 #include "mtled/plugin.hpp"
 
 namespace example {

@@ -8,7 +8,8 @@
 namespace mtled {
 
 void NodeSetBoundary::declare_selection(ComponentDeclaration& d) {
-  d.node_set("nodes").doc("the nodes this condition acts on: a mesh group or a geometric selector");
+  d.node_set("nodes", NodeSelector::syntax())
+      .doc("the nodes this condition acts on: a mesh group or a geometric selector");
   d.string_list("components")
       .defaults(json::array({"x", "y", "z"}))
       .choices({"x", "y", "z"})
@@ -19,7 +20,7 @@ void NodeSetBoundary::declare_selection(ComponentDeclaration& d) {
 
 NodeSetBoundary::NodeSetBoundary(const Parameters& parameters, Vec3 final_displacement, Mat3 final_gradient)
     : parameters_(parameters),
-      selector_(parameters.node_set("nodes")),
+      selector_(NodeSelector::from(parameters, "nodes")),
       final_displacement_(final_displacement),
       final_gradient_(final_gradient) {
   const auto components = parameters.string_list("components");

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "integrator_parameters.hpp"
+#include "mtled/interfaces/integrator.hpp"
 #include "mtled/plugin.hpp"
 
 namespace mtled {

@@ -31,6 +31,7 @@
 
 #include "integrator_parameters.hpp"
 #include "mtled/errors.hpp"
+#include "mtled/interfaces/integrator.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
 

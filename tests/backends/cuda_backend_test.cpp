@@ -7,6 +7,7 @@
 
 #include "mtled/errors.hpp"
 #include "mtled/force_kernel.hpp"
+#include "mtled/interfaces/backend.hpp"
 #include "mtled/io/mesh_writer.hpp"
 #include "test_support.hpp"
 

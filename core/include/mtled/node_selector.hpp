@@ -8,13 +8,13 @@
 //   {"sphere": {"center": [..], "radius": r}}                    nodes within r of the centre
 // with optional "tolerance" (m; default 1e-6 of the mesh's bounding-box diagonal) and "surface_only"
 // (only nodes on the body's boundary; default false).
-#include "mtled/json.hpp"
-
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "mtled/errors.hpp"
+#include "mtled/json.hpp"
+#include "mtled/parameters.hpp"
 #include "mtled/types.hpp"
 
 namespace mtled {
@@ -34,6 +34,10 @@ struct NodeSelector {
   // Parses and checks a selector; problems get JSON pointers below `pointer`.
   static std::optional<NodeSelector> parse(const nlohmann::json& value, const std::string& pointer,
                                            std::vector<Problem>& problems);
+  // The syntax a component declares a node-set parameter with (ComponentDeclaration::node_set), and the selector it
+  // reads back from its validated parameters.
+  static ValueSyntax syntax();
+  static NodeSelector from(const Parameters& parameters, std::string_view name);
   // Geometric test (group selectors are resolved against the mesh's named node sets instead).
   bool contains(const Vec3& x, double tol) const;
   std::string describe() const;

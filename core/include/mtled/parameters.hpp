@@ -2,9 +2,8 @@
 // One declaration per component: every parameter's type, default (or required), unit, allowed range and
 // doc. The same declaration drives scene validation, `mtled plugins --describe`, `mtled schema`, the
 // generated parameter reference (docs/parameters.md) and the conformance tests.
-#include "mtled/json.hpp"
-
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -12,11 +11,10 @@
 #include <vector>
 
 #include "mtled/errors.hpp"
+#include "mtled/json.hpp"
 #include "mtled/types.hpp"
 
 namespace mtled {
-
-struct NodeSelector;  // node_selector.hpp: what Parameters::node_set returns
 
 // What a component is for. Each category has its own interface in mtled/interfaces/ and its own place in
 // a scene (or none: a process group is the launcher's, not the scene's). `scene` is the kernel's own sections
@@ -40,8 +38,8 @@ enum class SceneBlocks { one, optional_one, list, non_empty_list, none };
 // Every plugin category, once: its name (the CMake CATEGORY, and <category> in the plugin file names
 // mtled-<category>-<type>.so), the scene key its blocks go under, and how many. Scene validation, the scene's JSON
 // schema, the plugin catalog, CMake's mtled_add_plugin (through MTLED_PLUGIN's check) and `mtled plugins` read this
-// table; a new category is a row here, its interface (mtled/interfaces/), its factory type in the Registry, and the
-// Scene member it is read into (if it has a scene key).
+// table; a new category is a value of Category, a row here and its interface (mtled/interfaces/), with the Scene
+// member it is read into if it has a scene key.
 struct CategoryInfo {
   Category category;
   std::string_view name;
@@ -103,6 +101,14 @@ struct NumericRange {
   std::string describe() const;  // "> 0", "[0, 1]", "!= 0", "any"
 };
 
+// The syntax of a structured value that its own component checks (a node selector, node_selector.hpp): the parameter
+// layer calls `check` when a scene is validated (problems with pointers below `where`) and shows `schema` in
+// `mtled schema`, without knowing the syntax itself.
+struct ValueSyntax {
+  std::function<bool(const json& value, const std::string& where, std::vector<Problem>& problems)> check;
+  json schema;
+};
+
 struct ParameterSpec {
   std::string name;
   ParameterType type = ParameterType::number;
@@ -112,6 +118,7 @@ struct ParameterSpec {
   NumericRange range;
   std::vector<json> choices;  // allowed values (strings, string-list entries, integers)
   std::string doc;
+  ValueSyntax syntax;  // a node_set's: NodeSelector::syntax()
 
   json to_json() const;         // for `mtled plugins --json`
   json to_json_schema() const;  // for `mtled schema`
@@ -155,7 +162,7 @@ class ComponentDeclaration {
   ParameterBuilder number_list(std::string name);
   ParameterBuilder number_map(std::string name);
   ParameterBuilder string_list(std::string name);
-  ParameterBuilder node_set(std::string name);
+  ParameterBuilder node_set(std::string name, ValueSyntax syntax);  // syntax: NodeSelector::syntax()
   ParameterBuilder file(std::string name);
   ComponentDeclaration& add(ParameterSpec spec);  // a spec built elsewhere (the kernel's common parameters)
 
@@ -199,7 +206,6 @@ class Parameters {
   std::vector<double> number_list(std::string_view name) const;
   std::map<std::string, double> number_map(std::string_view name) const;
   std::vector<std::string> string_list(std::string_view name) const;
-  NodeSelector node_set(std::string_view name) const;
   std::filesystem::path file(std::string_view name) const;  // as validate_scene resolved it
 
   std::optional<double> optional_number(std::string_view name) const;

@@ -1,5 +1,8 @@
 #pragma once
-// What a plugin author includes. One component per shared library:
+// What a plugin author includes, beside the interface the component implements. One component per shared library:
+//
+//   #include "mtled/interfaces/material.hpp"
+//   #include "mtled/plugin.hpp"
 //
 //   class OgdenMaterial final : public mtled::Material {
 //    public:

@@ -16,6 +16,7 @@
 #include "mtled/constraints.hpp"
 #include "mtled/errors.hpp"
 #include "mtled/force_kernel.hpp"
+#include "mtled/interfaces/backend.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
 #include "mtled/scope_timer.hpp"

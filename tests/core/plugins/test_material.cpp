@@ -2,6 +2,7 @@
 // compile definitions by tests/core/CMakeLists.txt).
 #include <stdexcept>
 
+#include "mtled/interfaces/material.hpp"
 #include "mtled/plugin.hpp"
 
 namespace mtled {

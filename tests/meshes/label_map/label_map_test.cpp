@@ -7,11 +7,12 @@
 
 #include <cmath>
 #include <cstring>
-#include <limits>
 #include <fstream>
+#include <limits>
 #include <numbers>
 
 #include "mtled/errors.hpp"
+#include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/io/label_image.hpp"
 #include "mtled/mesh.hpp"
 #include "test_support.hpp"

@@ -1,6 +1,7 @@
 // A boundary that pushes instead of prescribing, used only to exercise the kernel's force path
 // (Driver::forces()): a total force, ramped with the load, split equally among the nodes of a group.
 #include "mtled/discretisation.hpp"
+#include "mtled/interfaces/driver.hpp"
 #include "mtled/node_selector.hpp"
 #include "mtled/plugin.hpp"
 
