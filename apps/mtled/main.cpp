@@ -229,6 +229,9 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     for (const auto& problem : e.problems()) log().error("{}", problem.format());
     return 2;
+  } catch (const std::exception& e) {  // the group's plugin failed to start (MPI's initialisation)
+    log().error("joining the launcher's processes failed: {}", e.what());
+    return 1;
   }
   // The other ranks say only what went wrong; rank 0 tells the run.
   set_log_level(app::processes().writes() ? c.log_level : "error");
