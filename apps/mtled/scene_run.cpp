@@ -2,7 +2,6 @@
 #include "scene_run.hpp"
 
 #include "mtled/analysis/postprocess.hpp"
-#include "mtled/analysis/scene_sections.hpp"
 #include "mtled/io/image.hpp"
 #include "mtled/log.hpp"
 #include "mtled/simd.hpp"
