@@ -108,7 +108,7 @@ void Material::stress_batch(StressBatch& batch) const noexcept {
   }
 }
 
-json Material::closed_form() const { return nullptr; }
+DeviceLaw Material::device_law() const { return {}; }
 
 std::string_view to_string(NeedlePhase phase) {
   return phase == NeedlePhase::penetration ? "penetration" : "indentation";

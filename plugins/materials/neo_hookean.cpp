@@ -1,14 +1,11 @@
-// Compressible neo-Hookean law: the paper's eq. (1) with alpha = 2 (its Table 1 note),
-//   W = (mu/2)(J^(-2/3) tr C - 3) + (1/D)(J - 1)^2,
-//   S = 2 dW/dC = mu J^(-2/3) (I - (tr C / 3) C^-1) + (2/D) J (J - 1) C^-1,
-// using d(tr C)/dC = I and dJ/dC = (J/2) C^-1. Needs no eigen decomposition: C^-1 = F^-1 F^-T.
-#include <cmath>
-#include <limits>
-
+// Compressible neo-Hookean law, the paper's eq. (1) with alpha = 2: the plugin's parameters and the Material
+// interface; the law itself (stress and energy, one source for the one-point, SIMD and GPU paths) is in
+// neo_hookean_law-inl.h.
 #include "hyperelastic.hpp"
 #include "mtled/interfaces/material.hpp"
+#include "mtled/law/one_point.hpp"
 #include "mtled/plugin.hpp"
-#include "stress_batch.hpp"
+#include "neo_hookean_law-inl.h"
 
 namespace mtled {
 
@@ -25,44 +22,22 @@ class NeoHookeanMaterial final : public Material {
   }
 
   explicit NeoHookeanMaterial(const Parameters& p)
-      : mu_(p.number("mu")), D_(p.number("D")), volumetric_(D_), density_(p.number("density")) {}
+      : mu_(p.number("mu")), D_(p.number("D")), law_(mu_, D_), density_(p.number("density")) {}
 
   double density() const override { return density_; }
-  double p_wave_modulus() const override { return hyperelastic::p_wave_modulus(mu_, volumetric_); }
+  double p_wave_modulus() const override { return hyperelastic::p_wave_modulus(mu_, law_.volumetric); }
+  bool stress(const Mat3& F, Mat3& S) const noexcept override { return scalar::one_point_stress(law_, F, S); }
+  void stress_batch(StressBatch& batch) const noexcept override { neo_hookean_stress_batch(law_, batch); }
+  double energy(const Mat3& F) const noexcept override { return scalar::one_point_energy(law_, F); }
 
-  bool stress(const Mat3& F, Mat3& S) const noexcept override {
-    double J;
-    if (!hyperelastic::admissible(F, J)) return false;
-    const Mat3 F_inverse = F.inverse();
-    const Mat3 C_inverse = F_inverse * F_inverse.transpose();  // bitwise symmetric: same products, same order
-    const double shear = mu_ * hyperelastic::J_minus_two_thirds(J);
-    // tr C / 3 is 1 exactly at F = I, so S(I) = 0 exactly.
-    const double coefficient = volumetric_.J_dU_dJ(J) - shear * (F.squaredNorm() / 3.0);
-    Mat3 result = coefficient * C_inverse;
-    result.diagonal().array() += shear;
-    if (!result.allFinite()) return false;  // an F so extreme that S overflows
-    S = result;
-    return true;
-  }
-
-  void stress_batch(StressBatch& batch) const noexcept override {
-    hyperelastic::neo_hookean_stress_batch({mu_, volumetric_.bulk_modulus()}, batch);
-  }
-
-  json closed_form() const override {
-    return {{"law", "neo_hookean"}, {"mu", mu_}, {"D", D_}};
-  }
-
-  double energy(const Mat3& F) const noexcept override {
-    double J;
-    if (!hyperelastic::admissible(F, J)) return std::numeric_limits<double>::quiet_NaN();
-    return 0.5 * mu_ * (F.squaredNorm() * hyperelastic::J_minus_two_thirds(J) - 3.0) + volumetric_.energy(J);
-  }
+#ifdef MTLED_DEVICE_LAWS
+  DeviceLaw device_law() const override { return {&neo_hookean_device_stress_pass, &law_}; }
+#endif
 
  private:
   double mu_;
   double D_;
-  hyperelastic::VolumetricPenalty volumetric_;
+  NeoHookeanLaw law_;
   double density_;
 };
 

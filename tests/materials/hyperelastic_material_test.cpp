@@ -254,6 +254,17 @@ TEST(HyperelasticParameters, ModuliAndDensityFollowTheParameters) {
   EXPECT_NEAR(2 / 5.57738e-5 / 722.0, 2 * 1.49 / (3 * 0.02), 1e-3);
 }
 
+// A GPU backend runs a law only through the device code its plugin exports: built with CUDA, both shipped laws
+// export theirs (the law's single source compiled for the device); without CUDA neither does, and the backend would
+// refuse the scene by the material's region.
+TEST(HyperelasticDeviceCode, ExportedExactlyWhenBuiltWithCuda) {
+  for (const auto& [name, parameters] : {std::pair{"neo_hookean", kNeoHookean}, std::pair{"ogden", kSylgard}}) {
+    const DeviceLaw law = test::make<Material>(name, parameters)->device_law();
+    EXPECT_EQ(law.stress_pass != nullptr, MTLED_TEST_HAS_CUDA != 0) << name;
+    EXPECT_EQ(law.law != nullptr, MTLED_TEST_HAS_CUDA != 0) << name;
+  }
+}
+
 struct BadParameter {
   std::string material;
   std::string key;

@@ -1,4 +1,4 @@
-// The 3x3 symmetric eigensolver behind the Ogden law (plugins/materials/symmetric_eigen3.hpp): backward
+// The 3x3 symmetric eigensolver behind the Ogden law (mtled/law/arithmetic-inl.h, here with T = double): backward
 // stable whatever the spacing of the eigenvalues. For a symmetric A built as R diag(w) R^T in double, a
 // backward-stable solver gives |A V - V diag(values)| and |V^T V - I| of a few eps (|A|), and eigenvalues
 // within a few eps |A| of the exact ones (Weyl); the bounds below allow 20 eps.
@@ -10,10 +10,26 @@
 #include <random>
 
 #include "material_test_support.hpp"
-#include "symmetric_eigen3.hpp"
+#include "mtled/law/one_point.hpp"
 
 namespace mtled {
 namespace {
+
+// The solver's result as Eigen matrices: vectors.col(i) belongs to values[i].
+struct SymmetricEigen3 {
+  Vec3 values;
+  Mat3 vectors;
+};
+
+SymmetricEigen3 symmetric_eigen3(const Mat3& A) {
+  const scalar::SymmetricEigen3<double> e = scalar::symmetric_eigen3(scalar::to_matrix3(A));
+  SymmetricEigen3 out;
+  for (int i = 0; i < 3; ++i) {
+    out.values[i] = e.values[i];
+    out.vectors.col(i) = Vec3(e.vectors[i].x, e.vectors[i].y, e.vectors[i].z);
+  }
+  return out;
+}
 
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 

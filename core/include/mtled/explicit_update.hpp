@@ -3,31 +3,30 @@
 // Miller, IJNMBE 2011, for dynamic relaxation), with stiffness-proportional damping from the last two force
 // evaluations (UpdateCoefficients):
 //   u+ = u + beta (u - u-) + alpha M^-1 (f_ext - f_int - gamma (f_int - f_int-)).
-// beta = 1, alpha = h^2, gamma = 0 is the undamped central difference. The CPU's form of it, of dynamic relaxation's
-// increment sums and of a step's sums (StepSums), for DiscreteSystem's defaults, the CPU engine and the mpi backend
-// (which does the per-node work on a rank's own nodes); a device backend writes the same arithmetic in its own
-// language.
+// beta = 1, alpha = h^2, gamma = 0 is the undamped central difference. The CPU's loop of it (one unknown's arithmetic
+// is update_arithmetic.hpp's, which a GPU backend shares), of dynamic relaxation's increment sums and of a step's sums
+// (StepSums), for DiscreteSystem's defaults, the CPU engine and the mpi backend (which does the per-node work on a
+// rank's own nodes).
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <span>
 
 #include "mtled/interfaces/integrator.hpp"
+#include "mtled/update_arithmetic.hpp"
 
 namespace mtled {
 
 // u_next of nodes begin .. end - 1 (3 unknowns each); f_ext null: no external forces. f_int_previous is read only
-// where gamma != 0 (without it, the arithmetic of the update without stiffness damping, bit for bit).
+// where gamma != 0.
 inline void explicit_update(const double* u, const double* u_previous, const double* f_ext, const double* f_int,
                             const double* f_int_previous, const double* nodal_mass, const UpdateCoefficients& update,
                             double* u_next, std::size_t begin, std::size_t end) {
-  const double gamma = update.gamma;
   for (std::size_t i = begin; i < end; ++i) {
     const double step = update.alpha / nodal_mass[i];
-    for (std::size_t d = 3 * i; d < 3 * i + 3; ++d) {
-      const double f = gamma != 0.0 ? f_int[d] + gamma * (f_int[d] - f_int_previous[d]) : f_int[d];
-      u_next[d] = u[d] + update.beta * (u[d] - u_previous[d]) + step * ((f_ext != nullptr ? f_ext[d] : 0.0) - f);
-    }
+    for (std::size_t d = 3 * i; d < 3 * i + 3; ++d)
+      u_next[d] = updated_unknown(static_cast<std::int64_t>(d), u, u_previous, f_ext, f_int, f_int_previous, step,
+                                  update.beta, update.gamma);
   }
 }
 

@@ -2,8 +2,9 @@
 // force passes, the weights, the laws' constants, the masses) and the state (u_n, u_(n-1), the prediction, the
 // forces) stay on the device; a step is a few kernels (kernels.cu). Per step the host reads back the constraint
 // products' rows, the step's sums and, for the drivers, u_n at the nodes they read, and sends the constraint
-// multipliers; describe() counts those bytes. Laws: the ones whose Material::closed_form() the device knows (Ogden,
-// neo-Hookean); no volumetric treatment yet. Without a usable device the run stops at setup with exit 2.
+// multipliers; describe() counts those bytes. Laws: any whose plugin holds its device code (Material::device_law, the
+// law's single source compiled for the GPU: the shipped Ogden and neo-Hookean); no volumetric treatment yet. Without a
+// usable device the run stops at setup with exit 2.
 #include <algorithm>
 #include <chrono>
 #include <climits>
@@ -41,31 +42,34 @@ template <class Real>
 class DeviceRowsOf final : public DeviceRows {
  public:
   DeviceRowsOf(const cuda::DeviceLayout<Real>& layout, const std::vector<double>& weights,
-               const std::vector<std::uint16_t>& materials, const std::vector<cuda::Law>& laws) {
+               const std::vector<std::uint16_t>& materials, std::vector<DeviceLaw> laws, int device)
+      : laws_(std::move(laws)), device_(device) {
     upload(layout.point_rows, points_);
     upload(layout.node_rows, nodes_);
     weight_.upload(weights);
     material_.upload(materials);
-    laws_.upload(laws);
     point_rows_ = layout.points;
     node_rows_ = layout.nodes;
   }
 
   void forces(const double* u4, double* f4, double* records, int* first_bad, cudaStream_t stream) const override {
-    cuda::PointPass<Real> points;
-    points.rows = view(points_, point_rows_);
-    points.weight = weight_.data();
-    points.material = material_.data();
-    points.laws = laws_.data();
-    points.u4 = u4;
-    points.records = records;
-    points.first_bad = first_bad;
-    cuda::NodePass<Real> nodes;
-    nodes.rows = view(nodes_, node_rows_);
-    nodes.records = records;
-    nodes.f4 = f4;
-    cuda::internal_forces(points, nodes, stream);
-    check(cudaGetLastError(), "launching the force kernel");
+    cuda::deformation_gradients(cuda::PointPass<Real>{view(points_, point_rows_), u4, records}, stream);
+    check(cudaGetLastError(), "launching the gradient pass");
+    DeviceStressPass pass;
+    pass.points = point_rows_;
+    pass.weight = weight_.data();
+    pass.material = material_.data();
+    pass.records = records;
+    pass.first_bad = first_bad;
+    pass.device = device_;
+    pass.stream = stream;
+    for (std::size_t m = 0; m < laws_.size(); ++m) {
+      pass.material_index = static_cast<std::uint16_t>(m);
+      // Launched by the material plugin's own CUDA runtime, which reports its launch's error here.
+      check(static_cast<cudaError_t>(laws_[m].stress_pass(laws_[m].law, pass)), "launching a law's stress pass");
+    }
+    cuda::nodal_forces(cuda::NodePass<Real>{view(nodes_, node_rows_), records, f4}, stream);
+    check(cudaGetLastError(), "launching the node pass");
   }
 
   std::int64_t bytes() const override {
@@ -98,7 +102,8 @@ class DeviceRowsOf final : public DeviceRows {
   std::int64_t point_rows_ = 0, node_rows_ = 0;
   DeviceBuffer<double> weight_;
   DeviceBuffer<std::uint16_t> material_;
-  DeviceBuffer<cuda::Law> laws_;
+  std::vector<DeviceLaw> laws_;  // one per material index
+  int device_;
 };
 
 // A constraint block's Phi on the device, as of the block's revision.
@@ -115,8 +120,8 @@ class CudaBackend final : public StepEngine {
   static void declare(ComponentDeclaration& d) {
     d.summary(
         "An NVIDIA GPU: the force kernel, the update, the constraint projection's products and the step's sums run "
-        "on the device, where the state stays; built when CMake finds the CUDA toolkit. Supports the Ogden and "
-        "neo-Hookean laws, no volumetric treatment yet (docs/gpu.md).");
+        "on the device, where the state stays; built when CMake finds the CUDA toolkit. Runs any law whose plugin "
+        "holds its device code (the shipped Ogden and neo-Hookean do), no volumetric treatment yet (docs/gpu.md).");
     d.integer("device").unit("1").non_negative().defaults(0).doc(
         "which GPU (CUDA's device number, as nvidia-smi lists them)");
     d.example({{"device", 0}});
@@ -144,12 +149,14 @@ class CudaBackend final : public StepEngine {
     points_ = model.points().count();
     std::vector<double> weights(model.points().weights.begin(), model.points().weights.end());
     std::vector<std::uint16_t> materials(static_cast<std::size_t>(points_));
-    const std::vector<cuda::Law> laws = read_laws(model, materials);
+    std::vector<DeviceLaw> laws = read_laws(model, materials);
     const auto start = std::chrono::steady_clock::now();
     if (model.gradients().precision() == RowPrecision::single_precision)
-      rows_ = std::make_unique<DeviceRowsOf<float>>(cuda::build_device_layout<float>(model), weights, materials, laws);
+      rows_ = std::make_unique<DeviceRowsOf<float>>(cuda::build_device_layout<float>(model), weights, materials,
+                                                    std::move(laws), device_);
     else
-      rows_ = std::make_unique<DeviceRowsOf<double>>(cuda::build_device_layout<double>(model), weights, materials, laws);
+      rows_ = std::make_unique<DeviceRowsOf<double>>(cuda::build_device_layout<double>(model), weights, materials,
+                                                     std::move(laws), device_);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     precision_ = model.gradients().precision() == RowPrecision::single_precision ? "single" : "double";
     const std::size_t vector = 4 * (static_cast<std::size_t>(nodes_) + 1);  // and the zero sink node
@@ -159,7 +166,7 @@ class CudaBackend final : public StepEngine {
     staging_.resize(3 * static_cast<std::size_t>(nodes_));
     read_values_.resize(3 * static_cast<std::size_t>(nodes_));  // pinned once here, not as the drivers' reads grow
     read_list_.resize(static_cast<std::size_t>(nodes_));
-    records_.resize(cuda::kRecord * (static_cast<std::size_t>(points_) + 1));  // and the zero sink record
+    records_.resize(kDeviceRecord * (static_cast<std::size_t>(points_) + 1));  // and the zero sink record
     partials_.resize(cuda::kStepPartials * cuda::kReduceBlocks);
     evaluation_.resize(1);
     first_non_finite_.resize(1);
@@ -337,41 +344,26 @@ class CudaBackend final : public StepEngine {
   }
 
   // One law per distinct material of the model, in the order met; materials[p] = point p's law.
-  std::vector<cuda::Law> read_laws(const Discretisation& model, std::vector<std::uint16_t>& materials) const {
+  std::vector<DeviceLaw> read_laws(const Discretisation& model, std::vector<std::uint16_t>& materials) const {
     std::vector<const Material*> seen;
-    std::vector<cuda::Law> laws;
+    std::vector<DeviceLaw> laws;
     for (Index p = 0; p < points_; ++p) {
       const Material* material = &model.material(p);
       auto it = std::find(seen.begin(), seen.end(), material);
       if (it == seen.end()) {
-        laws.push_back(law_of(*material));
+        laws.push_back(material->device_law());
+        if (laws.back().stress_pass == nullptr)
+          refuse(fmt::format(
+              "the material of mesh region \"{}\" has no code for the device (its plugin was built without CUDA, or "
+              "its law is not written in the arithmetic of mtled/law/arithmetic-inl.h): run on the CPU (leave out "
+              "/backend, or --backend cpu)",
+              model.mesh().region_names[model.points().material_index[static_cast<std::size_t>(p)]]));
         seen.push_back(material);
         it = seen.end() - 1;
       }
       materials[static_cast<std::size_t>(p)] = static_cast<std::uint16_t>(it - seen.begin());
     }
     return laws;
-  }
-
-  cuda::Law law_of(const Material& material) const {
-    const json form = material.closed_form();
-    const std::string law = form.is_object() ? form.value("law", "") : "";
-    cuda::Law out;
-    if (law == "ogden") {
-      const double mu = form.at("mu").get<double>(), alpha = form.at("alpha").get<double>();
-      out.kind = cuda::kOgden;
-      out.half_alpha = 0.5 * alpha;
-      out.stress_factor = 2.0 * mu / alpha;
-    } else if (law == "neo_hookean") {
-      out.kind = cuda::kNeoHookean;
-      out.mu = form.at("mu").get<double>();
-    } else {
-      refuse(fmt::format("a material of this scene ({}) is not one the cuda backend evaluates on the device (ogden, "
-                         "neo_hookean): run on the CPU (leave out /backend, or --backend cpu)",
-                         form.is_null() ? "its law gives no closed form" : form.dump()));
-    }
-    out.two_over_D = 2.0 * (1.0 / form.at("D").get<double>());  // VolumetricPenalty::bulk_modulus(), bit for bit
-    return out;
   }
 
   // Queues the forces of u4 into f4, timed by events around the kernels; read_evaluation() waits for them.
@@ -397,7 +389,7 @@ class CudaBackend final : public StepEngine {
 
   std::int64_t streamed_bytes() const {
     const std::int64_t vectors = 4 * (static_cast<std::int64_t>(nodes_) + 1) * 8;
-    return rows_->bytes() + static_cast<std::int64_t>(points_) * (2 * cuda::kRecord * 8 + 8 + 2) + 2 * vectors;
+    return rows_->bytes() + static_cast<std::int64_t>(points_) * (2 * kDeviceRecord * 8 + 8 + 2) + 2 * vectors;
   }
 
   DeviceBlock& on_device(const ConstraintBlock& block) {

@@ -1,14 +1,14 @@
 // The CUDA backend's kernels (kernels.hpp). The forces in three launches: F at each point (a slice of 32 points per
-// block, its rows shared by the block's warps), the stress and its record (one thread per point), the node-centric
-// sum of the forces (a slice of 32 nodes per block); one thread per node for the update; fixed grids with tree
-// reductions in shared memory for the sums. The laws are the arithmetic of the CPU's stress_batch() (Ogden:
-// principal stretches by the closed-form eigensolver of symmetric_eigen3.hpp; neo-Hookean: C^-1 from adj(F)), so
-// double-precision runs agree with the CPU to round-off.
+// block, its rows shared by the block's warps), the stresses (each material's law, compiled into its own plugin:
+// Material::device_law), the node-centric sum of the forces (a slice of 32 nodes per block); one thread per node for
+// the update (the CPU's explicit_update arithmetic, update_arithmetic.hpp); fixed grids with tree reductions in
+// shared memory for the sums.
 #include <cfloat>
 #include <climits>
 #include <cmath>
 
 #include "kernels.hpp"
+#include "mtled/update_arithmetic.hpp"
 
 namespace mtled::cuda {
 namespace {
@@ -17,155 +17,8 @@ constexpr int kThreads = 256;
 
 int blocks_for(std::int64_t n) { return static_cast<int>((n + kThreads - 1) / kThreads); }
 
-// ---- the laws -------------------------------------------------------------------------------------------------
-
-__device__ double determinant(const double (&m)[3][3]) {
-  return m[0][0] * (m[1][1] * m[2][2] - m[2][1] * m[1][2]) - m[1][0] * (m[0][1] * m[2][2] - m[2][1] * m[0][2]) +
-         m[2][0] * (m[0][1] * m[1][2] - m[1][1] * m[0][2]);
-}
-
-__device__ void cross(const double* a, const double* b, double* out) {
-  out[0] = a[1] * b[2] - a[2] * b[1];
-  out[1] = a[2] * b[0] - a[0] * b[2];
-  out[2] = a[0] * b[1] - a[1] * b[0];
-}
-__device__ double dot(const double* a, const double* b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-// B v for a symmetric B.
-__device__ void times(const double (&B)[3][3], const double* v, double* out) {
-  for (int i = 0; i < 3; ++i) out[i] = B[i][0] * v[0] + B[i][1] * v[1] + B[i][2] * v[2];
-}
-
-// The eigen decomposition of a symmetric 3x3 matrix (symmetric_eigen3.hpp, Scherzinger & Dohrmann, CMAME 197
-// (2008) 4007): the eigenvalue farthest from the others from the characteristic cubic, its vector from the best
-// conditioned cross product, the other two by one Jacobi rotation. values[i] belongs to the column vectors[.][i].
-__device__ void symmetric_eigen3(const double (&A)[3][3], double (&values)[3], double (&vectors)[3][3]) {
-  const double mean = (A[0][0] + A[1][1] + A[2][2]) / 3.0;
-  double B[3][3];
-  double scale = 0.0;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) {
-      B[i][j] = A[i][j] - (i == j ? mean : 0.0);
-      scale = fmax(scale, fabs(B[i][j]));
-    }
-  if (!(scale > 0.0)) {
-    for (int i = 0; i < 3; ++i) {
-      values[i] = mean;
-      for (int j = 0; j < 3; ++j) vectors[i][j] = i == j ? 1.0 : 0.0;
-    }
-    return;
-  }
-  for (auto& row : B)
-    for (double& b : row) b /= scale;
-  const double j2 = 0.5 * (B[0][0] * B[0][0] + B[1][1] * B[1][1] + B[2][2] * B[2][2]) + B[0][1] * B[0][1] +
-                    B[0][2] * B[0][2] + B[1][2] * B[1][2];
-  const double rho = 2.0 * sqrt(j2 / 3.0);
-  const double cos_3theta = fmin(1.0, fmax(-1.0, 4.0 * determinant(B) / (rho * rho * rho)));
-  const double theta = acos(cos_3theta) / 3.0;
-  const double eta = theta < M_PI / 6.0 ? rho * cos(theta) : rho * cos(theta + 2.0 * M_PI / 3.0);
-  const double r0[3] = {B[0][0] - eta, B[0][1], B[0][2]};
-  const double r1[3] = {B[1][0], B[1][1] - eta, B[1][2]};
-  const double r2[3] = {B[2][0], B[2][1], B[2][2] - eta};
-  double c01[3], c02[3], c12[3];
-  cross(r0, r1, c01);
-  cross(r0, r2, c02);
-  cross(r1, r2, c12);
-  const double n01 = dot(c01, c01), n02 = dot(c02, c02), n12 = dot(c12, c12);
-  // Chosen by value, not through a pointer to one of the three: that would put them in local memory.
-  const bool first = n01 >= n02 && n01 >= n12, second = !first && n02 >= n12;
-  const double norm = first ? n01 : second ? n02 : n12;
-  const double inverse = 1.0 / sqrt(norm);
-  double v1[3];
-  for (int i = 0; i < 3; ++i) v1[i] = (first ? c01[i] : second ? c02[i] : c12[i]) * inverse;
-  double u[3];
-  if (fabs(v1[0]) > fabs(v1[1])) {
-    u[0] = -v1[2], u[1] = 0.0, u[2] = v1[0];
-  } else {
-    u[0] = 0.0, u[1] = v1[2], u[2] = -v1[1];
-  }
-  const double u_inverse = 1.0 / sqrt(dot(u, u));
-  for (double& x : u) x *= u_inverse;
-  double w[3], Bu[3], Bw[3], Bv[3];
-  cross(v1, u, w);
-  times(B, u, Bu);
-  times(B, w, Bw);
-  const double b_uu = dot(u, Bu), b_uw = dot(u, Bw), b_ww = dot(w, Bw);
-  double eta2 = b_uu, eta3 = b_ww, v2[3], v3[3];
-  for (int i = 0; i < 3; ++i) v2[i] = u[i], v3[i] = w[i];
-  if (b_uw != 0.0) {
-    const double tau = (b_ww - b_uu) / (2.0 * b_uw);
-    const double t = copysign(1.0, tau) / (fabs(tau) + sqrt(1.0 + tau * tau));
-    const double c = 1.0 / sqrt(1.0 + t * t), s = t * c;
-    eta2 = b_uu - t * b_uw;
-    eta3 = b_ww + t * b_uw;
-    for (int i = 0; i < 3; ++i) {
-      v2[i] = c * u[i] - s * w[i];
-      v3[i] = s * u[i] + c * w[i];
-    }
-  }
-  times(B, v1, Bv);
-  const double eta1 = dot(v1, Bv);
-  values[0] = eta1 * scale + mean;
-  values[1] = eta2 * scale + mean;
-  values[2] = eta3 * scale + mean;
-  for (int i = 0; i < 3; ++i) {
-    vectors[i][0] = v1[i];
-    vectors[i][1] = v2[i];
-    vectors[i][2] = v3[i];
-  }
-}
-
-// S (symmetric, full) of F, false where F or S is inadmissible (J <= 0, anything not finite).
-__device__ bool stress(const Law& law, const double (&F)[3][3], double (&S)[3][3]) {
-  const double J = determinant(F);
-  double any = J;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) any += 0.0 * F[i][j];
-  if (!(J > 0.0) || !(J <= DBL_MAX) || !(any == J)) return false;
-  const double J_dU_dJ = law.two_over_D * J * (J - 1.0);
-  if (law.kind == kOgden) {
-    double C[3][3], lambda2[3], Q[3][3];
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) C[i][j] = F[0][i] * F[0][j] + F[1][i] * F[1][j] + F[2][i] * F[2][j];
-    symmetric_eigen3(C, lambda2, Q);
-    const double log_J = log(J);
-    double isochoric[3], sum = 0.0;
-    for (int i = 0; i < 3; ++i) {
-      isochoric[i] = exp(law.half_alpha * (log(lambda2[i]) - (2.0 / 3.0) * log_J));
-      sum += isochoric[i];
-    }
-    const double a = J_dU_dJ - law.stress_factor * (sum * (1.0 / 3.0));
-    double principal[3];
-    for (int i = 0; i < 3; ++i) principal[i] = (law.stress_factor * isochoric[i] + a) / lambda2[i];
-    for (int i = 0; i < 3; ++i)
-      for (int j = i; j < 3; ++j)
-        S[i][j] = S[j][i] = Q[i][0] * principal[0] * Q[j][0] + Q[i][1] * principal[1] * Q[j][1] +
-                            Q[i][2] * principal[2] * Q[j][2];
-  } else {
-    const double inverse_J = 1.0 / J;
-    double Fi[3][3], squared_norm = 0.0;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) {
-        const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
-        Fi[i][j] = (F[r0][c0] * F[r1][c1] - F[r0][c1] * F[r1][c0]) * inverse_J;
-        squared_norm += F[i][j] * F[i][j];
-      }
-    const double shear = law.mu * exp((-2.0 / 3.0) * log(J));
-    const double coefficient = J_dU_dJ - shear * (squared_norm / 3.0);
-    for (int i = 0; i < 3; ++i)
-      for (int j = i; j < 3; ++j) {
-        S[i][j] = coefficient * (Fi[i][0] * Fi[j][0] + Fi[i][1] * Fi[j][1] + Fi[i][2] * Fi[j][2]);
-        if (i == j) S[i][j] += shear;
-        S[j][i] = S[i][j];
-      }
-  }
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      if (!(S[i][j] - S[i][j] == 0.0)) return false;
-  return true;
-}
-
 // ---- the force kernel -------------------------------------------------------------------------------------------
-// Three launches. A block takes one slice, its rows shared by Parts warps, warp w taking entries w, w + Parts, ...:
+// The gradient and node passes. A block takes one slice, its rows shared by Parts warps, warp w taking entries w, w + Parts, ...:
 // each thread's chain of dependent loads is Parts times shorter than a whole row's, and the slices' hundreds of
 // blocks reach every multiprocessor (a warp per slice left most of the GPU idle on the default scene: its 7,502 nodes
 // were 30 blocks, each thread walking about 200 entries one after the other; on an H100 the node pass went from 335
@@ -209,29 +62,8 @@ __global__ void __launch_bounds__(kPointThreads) gradient_pass(PointPass<Real> a
   }
   const std::int64_t p = slice * kSlice + lane;
   if (!add_parts<kPointParts>(sum) || p >= a.rows.rows) return;
-  double* record = a.records + kRecord * p;
+  double* record = a.records + kDeviceRecord * p;
   for (int c = 0; c < 9; ++c) record[c] = sum[c];
-}
-
-// One thread per point: F from its record, the stress, and the record w F S in its place.
-__global__ void stress_pass(std::int64_t points, const double* weight, const std::uint16_t* material, const Law* laws,
-                            double* records, int* first_bad) {
-  const std::int64_t p = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
-  if (p >= points) return;
-  double* record = records + kRecord * p;
-  double F[3][3];
-  for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < 3; ++k) F[i][k] = i == k ? 1.0 + record[3 * i + k] : record[3 * i + k];
-  double S[3][3];
-  if (!stress(laws[material[p]], F, S)) {
-    for (int c = 0; c < kRecord; ++c) record[c] = 0.0;
-    atomicMin(first_bad, static_cast<int>(p));
-    return;
-  }
-  const double w = weight[p];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      record[3 * i + j] = w * (F[i][0] * S[0][j] + F[i][1] * S[1][j] + F[i][2] * S[2][j]);
 }
 
 // f_I = sum over node I's points of (w F S) t_pI.
@@ -242,7 +74,7 @@ __global__ void __launch_bounds__(kNodeThreads) node_pass(NodePass<Real> a) {
   const std::int64_t end = a.rows.slice_begin[slice + 1];
   double f[3] = {0.0, 0.0, 0.0};
   for (std::int64_t e = a.rows.slice_begin[slice] + part * kSlice + lane; e < end; e += kNodeThreads) {
-    const double* record = a.records + kRecord * static_cast<std::int64_t>(a.rows.column[e]);
+    const double* record = a.records + kDeviceRecord * static_cast<std::int64_t>(a.rows.column[e]);
     const double t[3] = {static_cast<double>(a.rows.gx[e]), static_cast<double>(a.rows.gy[e]),
                          static_cast<double>(a.rows.gz[e])};
     const double2 p0 = *reinterpret_cast<const double2*>(record);      // P00 P01
@@ -274,8 +106,7 @@ __global__ void predict_kernel(std::int32_t nodes, const double* u, const double
   const double step = alpha / mass[i];
   for (int c = 0; c < 3; ++c) {
     const std::int64_t d = 4 * i + c;
-    const double f_int = gamma != 0.0 ? f[d] + gamma * (f[d] - f_previous[d]) : f[d];
-    const double value = u[d] + beta * (u[d] - u_previous[d]) + step * ((f_ext != nullptr ? f_ext[d] : 0.0) - f_int);
+    const double value = updated_unknown(d, u, u_previous, f_ext, f, f_previous, step, beta, gamma);
     prediction[d] = value;
     free[d] = value;
     if (!isfinite(value)) atomicMin(first_non_finite, static_cast<unsigned long long>(3 * i + c));
@@ -442,18 +273,20 @@ __global__ void add_correction_kernel(ConstraintView b, const double* y, double*
 }  // namespace
 
 template <class Real>
-void internal_forces(const PointPass<Real>& points, const NodePass<Real>& nodes, cudaStream_t stream) {
+void deformation_gradients(const PointPass<Real>& points, cudaStream_t stream) {
   const std::int64_t point_slices = (points.rows.rows + kSlice - 1) / kSlice;
-  if (point_slices > 0) {
-    gradient_pass<Real><<<static_cast<int>(point_slices), kPointThreads, 0, stream>>>(points);
-    stress_pass<<<blocks_for(points.rows.rows), kThreads, 0, stream>>>(points.rows.rows, points.weight, points.material,
-                                                                       points.laws, points.records, points.first_bad);
-  }
+  if (point_slices > 0) gradient_pass<Real><<<static_cast<int>(point_slices), kPointThreads, 0, stream>>>(points);
+}
+template void deformation_gradients<float>(const PointPass<float>&, cudaStream_t);
+template void deformation_gradients<double>(const PointPass<double>&, cudaStream_t);
+
+template <class Real>
+void nodal_forces(const NodePass<Real>& nodes, cudaStream_t stream) {
   const std::int64_t node_slices = (nodes.rows.rows + kSlice - 1) / kSlice;
   if (node_slices > 0) node_pass<Real><<<static_cast<int>(node_slices), kNodeThreads, 0, stream>>>(nodes);
 }
-template void internal_forces<float>(const PointPass<float>&, const NodePass<float>&, cudaStream_t);
-template void internal_forces<double>(const PointPass<double>&, const NodePass<double>&, cudaStream_t);
+template void nodal_forces<float>(const NodePass<float>&, cudaStream_t);
+template void nodal_forces<double>(const NodePass<double>&, cudaStream_t);
 
 void predict(std::int32_t nodes, const double* u4, const double* u_previous4, const double* f4,
              const double* f_previous4, const double* f_ext4, const double* mass, double alpha, double beta,

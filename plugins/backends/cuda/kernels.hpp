@@ -1,28 +1,17 @@
 #pragma once
 // The CUDA backend's kernels (kernels.cu), called from the host engine (cuda_backend.cpp) with device pointers.
 // Device vectors of nodal values hold 4 doubles per node (x, y, z, 0) plus a zero sink node at the end; the stress
-// records hold kRecord doubles per integration point plus a zero sink record. Every reduction runs over a fixed
+// records hold kDeviceRecord doubles per integration point (mtled/law/device_stress_pass.hpp: F - I, then w F S) plus
+// a zero sink record. Every reduction runs over a fixed
 // grid in a fixed order, so a result is the same on every run (no floating-point atomics).
 #include <cuda_runtime.h>
 
 #include <cstdint>
 
+#include "mtled/law/device_stress_pass.hpp"
 #include "sliced_rows.hpp"
 
 namespace mtled::cuda {
-
-constexpr int kRecord = 10;  // w P row by row (P_00 .. P_22), then one zero: 80 bytes, 16-byte aligned
-
-// A constitutive law the device evaluates (Material::closed_form): the constants of its stress_batch().
-struct Law {
-  int kind = 0;               // kOgden or kNeoHookean
-  double half_alpha = 0.0;    // Ogden: alpha / 2
-  double stress_factor = 0.0; // Ogden: 2 mu / alpha
-  double mu = 0.0;            // neo-Hookean
-  double two_over_D = 0.0;    // both: (2/D), J U'(J) = (2/D) J (J - 1)
-};
-constexpr int kOgden = 0;
-constexpr int kNeoHookean = 1;
 
 // Device pointers of one pass's sliced rows (SlicedRows).
 template <class Real>
@@ -39,12 +28,8 @@ struct SlicedView {
 template <class Real>
 struct PointPass {
   SlicedView<Real> rows;
-  const double* weight = nullptr;
-  const std::uint16_t* material = nullptr;
-  const Law* laws = nullptr;
   const double* u4 = nullptr;  // the displacements evaluated
   double* records = nullptr;
-  int* first_bad = nullptr;  // atomicMin of the inadmissible points' indices (INT_MAX: none)
 };
 
 template <class Real>
@@ -54,9 +39,12 @@ struct NodePass {
   double* f4 = nullptr;
 };
 
-// f = f_int(u): F at the points, their stresses, the nodes' sums (three launches on `stream`).
+// f = f_int(u) in three steps on `stream`: F - I at the points into their records, the stresses (each material's
+// DeviceLaw, queued by the host), the nodes' sums of the records.
 template <class Real>
-void internal_forces(const PointPass<Real>& points, const NodePass<Real>& nodes, cudaStream_t stream);
+void deformation_gradients(const PointPass<Real>& points, cudaStream_t stream);
+template <class Real>
+void nodal_forces(const NodePass<Real>& nodes, cudaStream_t stream);
 
 // pred = u + beta (u - u_prev) + alpha M^-1 (f_ext - f - gamma (f - f_prev)) (f_ext null: none; f_prev read only
 // where gamma != 0), free = pred; first_non_finite gets the lowest unknown (3 node + component) of pred that is not

@@ -1,4 +1,5 @@
 #pragma once
+#include "mtled/law/device_stress_pass.hpp"
 #include "mtled/parameters.hpp"
 #include "mtled/types.hpp"
 
@@ -45,14 +46,13 @@ class Material {
   virtual double p_wave_modulus() const = 0;
   virtual bool stress(const Mat3& F, Mat3& S) const noexcept = 0;
   virtual double energy(const Mat3& F) const noexcept = 0;
-  // The stresses of a batch of points, which the force kernel calls. The default calls stress() per point; a
-  // law overrides it to vectorise across the points, and must then agree with stress() to round-off (the
-  // material conformance suite checks both on the same deformations).
+  // The stresses of a batch of points, which the force kernel calls. The default calls stress() per point; a law
+  // written once in the arithmetic of mtled/law/arithmetic-inl.h gets a vectorised one from the same source
+  // (mtled/law/stress_batch-inl.h), which the material conformance suite checks against stress().
   virtual void stress_batch(StressBatch& batch) const noexcept;
-  // The law by name with its constants, for a backend that evaluates stresses itself (a GPU's): {"law": "ogden",
-  // "mu", "alpha", "D"} or {"law": "neo_hookean", "mu", "D"}. Null (the default) when the law offers none: such a
-  // backend then refuses the scene, naming the material.
-  virtual json closed_form() const;
+  // The law's code for a GPU backend, compiled into the plugin from the same source (mtled/law/device_stress_pass.cuh).
+  // Empty (the default) where the plugin has none: such a backend then refuses the scene, naming the material.
+  virtual DeviceLaw device_law() const;
 };
 
 }  // namespace mtled
