@@ -10,32 +10,18 @@
 // and its Material::device_law() returns {&my_law_device_stress_pass, &law_}.
 #include <cuda_runtime.h>
 
-#include "mtled/law/arithmetic-inl.h"
-#include "mtled/law/device_stress_pass.hpp"
+#include "mtled/law/stress_record.hpp"
 
 namespace mtled::scalar {
 
-// Record p holds F - I; it gets w P = w F S, or zeros and first_bad where F or S is inadmissible.
+// Record p holds F - I; it gets w P = w F S (stress_record.hpp), or zeros and first_bad where F or S is
+// inadmissible.
 template <class Law>
 __global__ void law_stress_pass(Law law, DeviceStressPass pass) {
   const std::int64_t p = static_cast<std::int64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
   if (p >= pass.points || pass.material[p] != pass.material_index) return;
-  double* record = pass.records + kDeviceRecord * p;
-  Matrix3<double> F;
-  for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < 3; ++k) F.m[i][k] = i == k ? 1.0 + record[3 * i + k] : record[3 * i + k];
-  const LawStress<double> result = evaluate_stress(law, F);
-  if (!result.admissible) {
-    for (int c = 0; c < kDeviceRecord; ++c) record[c] = 0.0;
+  if (!stress_record(law, pass.weight[p], pass.records + kDeviceRecord * p))
     atomicMin(pass.first_bad, static_cast<int>(p));
-    return;
-  }
-  double S[3][3];  // the whole of S from its upper triangle
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) S[i][j] = i <= j ? result.S.m[i][j] : result.S.m[j][i];
-  const double w = pass.weight[p];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) record[3 * i + j] = w * (F.m[i][0] * S[0][j] + F.m[i][1] * S[1][j] + F.m[i][2] * S[2][j]);
 }
 
 // The plugin's CUDA runtime is its own (statically linked): it learns the backend's device here, and reports its
