@@ -117,7 +117,7 @@ int SceneRun::finish_without_result(const std::string& status, double solve_time
 // The output section's displacement field needs an image with a frame and a mesh that records its own: checked
 // before the run, not after it.
 void SceneRun::check_displacement_field() const {
-  const auto like = scene_.section("output").optional_file("displacement_field_like");
+  const auto like = scene_.section("output").read<OutputSettings>().displacement_field_like;
   if (!like) return;
   if (simulation_->system().discretisation().mesh().coordinate_system.empty())
     throw InputError("/output/displacement_field_like",
@@ -130,17 +130,16 @@ void SceneRun::check_displacement_field() const {
 
 // The field on the output section's image, written next to result.vtu (mtled field's work).
 void SceneRun::write_displacement_field() const {
-  const Parameters& output = scene_.section("output");
-  const auto like = output.optional_file("displacement_field_like");
-  if (!like) return;
+  const auto output = scene_.section("output").read<OutputSettings>();
+  if (!output.displacement_field_like) return;
   FieldOptions field;
   field.run = folder_.path();
-  field.like = *like;
-  field.output = folder_.path() / (output.string("displacement_field_format") == "nifti" ? "displacement_field.nii.gz"
-                                                                                         : "displacement_field.nrrd");
-  field.direction = output.string("displacement_field_direction");
+  field.like = *output.displacement_field_like;
+  field.output = folder_.path() / (output.displacement_field_format == "nifti" ? "displacement_field.nii.gz"
+                                                                               : "displacement_field.nrrd");
+  field.direction = output.displacement_field_direction;
   field.frame = simulation_->system().discretisation().mesh().coordinate_system;
-  field.decay_mm = 1e3 * output.number("displacement_field_decay");
+  field.decay_mm = 1e3 * output.displacement_field_decay;
   field_command(field, plugin_paths_);
 }
 

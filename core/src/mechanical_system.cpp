@@ -38,7 +38,7 @@ std::vector<std::shared_ptr<const Material>> region_materials(const Scene& scene
   std::shared_ptr<const Material> fallback;
   for (const auto& block : scene.materials) {
     std::shared_ptr<const Material> material = build_component<Material>(catalog, block);
-    const auto region = block.parameters.optional_string("region");
+    const auto region = block.parameters.read<MaterialRegion>().region;
     if (!region) {
       fallback = material;
       continue;
@@ -101,10 +101,11 @@ void MechanicalSystem::build_discretisation(const Scene& scene, PluginCatalog& c
                                             std::vector<int> cell_groups) {
   auto shape_functions = build_component<ShapeFunctions>(catalog, scene.shape_function);
   Discretisation::Options options;
-  options.integration_points_per_tet = static_cast<int>(scene.discretisation.integer("integration_points_per_tet"));
-  options.consistent_integration = scene.discretisation.boolean("consistent_integration");
-  options.precision = scene.discretisation.string("precision") == "single" ? RowPrecision::single_precision
-                                                                           : RowPrecision::double_precision;
+  const auto discretisation = scene.discretisation.read<DiscretisationSettings>();
+  options.integration_points_per_tet = discretisation.integration_points_per_tet;
+  options.consistent_integration = discretisation.consistent_integration;
+  options.precision =
+      discretisation.precision == "single" ? RowPrecision::single_precision : RowPrecision::double_precision;
   options.cell_groups = std::move(cell_groups);
   discretisation_ = std::make_unique<Discretisation>(std::move(mesh), shape_functions, std::move(materials), options);
   kernel_ = std::make_unique<ForceKernel>(

@@ -280,7 +280,10 @@ json ComponentDeclaration::to_json_schema() const {
 
 Parameters::Parameters(const ComponentDeclaration& declaration, json values, std::string pointer)
     : component_(declaration.name()), pointer_(std::move(pointer)), values_(std::move(values)) {
-  for (const auto& p : declaration.parameters()) types_.emplace_back(p.name, p.type);
+  for (const auto& p : declaration.parameters()) {
+    types_.emplace_back(p.name, p.type);
+    if (p.binding.assign != nullptr) bindings_.emplace_back(p.name, p.binding);
+  }
 }
 
 std::string Parameters::pointer(std::string_view name) const { return pointer_ + "/" + pointer_escape(name); }

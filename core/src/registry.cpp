@@ -14,6 +14,7 @@ std::vector<ParameterSpec> common_parameters(Category category) {
     region.unit = "1";
     region.doc = "mesh region (physical volume group or ELSET) this material fills; omitted: every region "
                  "that no other material names";
+    ParameterBuilder(region).to<&MaterialRegion::region>();
     specs.push_back(region);
   }
   return specs;

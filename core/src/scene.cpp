@@ -298,21 +298,28 @@ const ComponentDeclaration& discretisation_declaration() {
         .defaults(1)
         .choices({1, 4})
         .unit("1")
-        .doc("integration points in each background tet: 1 at the centroid (the paper's choice) or a 4-point "
-             "rule exact for quadratics");
+        .doc(
+            "integration points in each background tet: 1 at the centroid (the paper's choice) or a 4-point "
+            "rule exact for quadratics")
+        .to<&DiscretisationSettings::integration_points_per_tet>();
     d.boolean("consistent_integration")
         .defaults(true)
-        .doc("correct the test-function gradients so that the discrete equations reproduce homogeneous "
-             "deformations exactly (variationally consistent integration, Chen et al. 2013; passes the patch "
-             "test); false gives the paper's plain MTLED quadrature");
+        .doc(
+            "correct the test-function gradients so that the discrete equations reproduce homogeneous "
+            "deformations exactly (variationally consistent integration, Chen et al. 2013; passes the patch "
+            "test); false gives the paper's plain MTLED quadrature")
+        .to<&DiscretisationSettings::consistent_integration>();
     d.string("precision")
         .defaults("single")
         .choices({"double", "single"})
-        .doc("the precision the force kernel stores its rows in: single stores the shape-function gradients and "
-             "the corrected test gradients as float (about 6e-8 relative rounding each; 11-28% faster on the shipped needle scenes, fields "
-             "within 1e-8 of double's); double stores the gradients alone and corrects them in the kernel, the "
-             "reference for round-off checks. Stresses, sums and the state are double in both "
-             "(docs/performance.md)");
+        .doc(
+            "the precision the force kernel stores its rows in: single stores the shape-function gradients and "
+            "the corrected test gradients as float (about 6e-8 relative rounding each; 11-28% faster on the shipped "
+            "needle scenes, fields "
+            "within 1e-8 of double's); double stores the gradients alone and corrects them in the kernel, the "
+            "reference for round-off checks. Stresses, sums and the state are double in both "
+            "(docs/performance.md)")
+        .to<&DiscretisationSettings::precision>();
     return d;
   }();
   return declaration;

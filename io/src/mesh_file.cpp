@@ -14,10 +14,15 @@ namespace fs = std::filesystem;
 namespace mtled::mesh_readers {
 
 void declare_file_parameters(ComponentDeclaration& declaration, std::string_view format) {
-  declaration.string("path").doc(
-      fmt::format("The mesh file ({}). A relative path is taken from the folder of the scene file.", format));
-  declaration.number("scale").unit("1").positive().defaults(1.0).doc(
-      "Multiplies every coordinate: mtled works in metres, so use 0.001 for a mesh drawn in millimetres.");
+  declaration.string("path")
+      .doc(fmt::format("The mesh file ({}). A relative path is taken from the folder of the scene file.", format))
+      .to<&FileSettings::path>();
+  declaration.number("scale")
+      .unit("1")
+      .positive()
+      .defaults(1.0)
+      .doc("Multiplies every coordinate: mtled works in metres, so use 0.001 for a mesh drawn in millimetres.")
+      .to<&FileSettings::scale>();
 }
 
 namespace {
@@ -64,7 +69,7 @@ MeshFileText read_text_file(const fs::path& file, const std::string& where) {
 }
 
 MeshFileText read_mesh_file(const Parameters& parameters, const MeshContext& context) {
-  const fs::path given = parameters.string("path");
+  const fs::path given = parameters.read<FileSettings>().path;
   // Normalised (no "scenes/../meshes"), so that messages name the file as a user would.
   const fs::path file =
       (given.is_absolute() || context.scene_directory.empty() ? given : context.scene_directory / given).lexically_normal();

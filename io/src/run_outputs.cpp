@@ -20,58 +20,74 @@ SceneSection output_section() {
         .defaults(0)
         .non_negative()
         .unit("1")
-        .doc("write steps/NNNNNN.vtu and series.pvd every this many steps; 0 writes the final state only");
+        .doc("write steps/NNNNNN.vtu and series.pvd every this many steps; 0 writes the final state only")
+        .to<&OutputSettings::every_steps>();
     d.integer("history_every_steps")
         .defaults(20)
         .at_least(1)
         .unit("1")
-        .doc("add a row to needle.csv and reactions.csv every this many steps (and at the last step)");
+        .doc("add a row to needle.csv and reactions.csv every this many steps (and at the last step)")
+        .to<&OutputSettings::history_every_steps>();
     d.string_list("cell_data")
         .defaults(json::array())
         .choices(field_names)
         .doc(
             "per-cell fields in result.vtu and the step files, evaluated at each tet's integration points "
-            "(averaged)");
+            "(averaged)")
+        .to<&OutputSettings::cell_data>();
     d.string("vtu_format")
         .defaults("binary")
         .choices({"binary", "ascii"})
-        .doc("how result.vtu and steps/*.vtu store their arrays: \"binary\" (zlib-compressed, appended in base64, as "
-             "VTK writes them) or \"ascii\" (text, about three times larger); both exact");
+        .doc(
+            "how result.vtu and steps/*.vtu store their arrays: \"binary\" (zlib-compressed, appended in base64, as "
+            "VTK writes them) or \"ascii\" (text, about three times larger); both exact")
+        .to<&OutputSettings::vtu_format>();
     d.string("length_unit")
         .defaults("m")
         .choices({"m", "mm"})
-        .doc("unit of the coordinates and displacements in result.vtu and steps/*.vtu: \"m\", or \"mm\", 3D "
-             "Slicer's unit, so that a result of a label-map scene loads on top of its image (the file is tagged "
-             "LENGTH_UNIT; mtled compare reads it back in metres); stresses stay in Pa");
+        .doc(
+            "unit of the coordinates and displacements in result.vtu and steps/*.vtu: \"m\", or \"mm\", 3D "
+            "Slicer's unit, so that a result of a label-map scene loads on top of its image (the file is tagged "
+            "LENGTH_UNIT; mtled compare reads it back in metres); stresses stay in Pa")
+        .to<&OutputSettings::length_unit>();
     d.file("displacement_field_like")
         .optional()
-        .doc("an image (NRRD, NIfTI; the label map the mesh was made from, the pre-operative MRI) on whose grid the "
-             "run's displacement is written after the run, as displacement_field.nrrd or .nii.gz (what mtled field "
-             "--like IMAGE writes; docs/label-maps.md); the mesh must record its frame, as a label-map mesh does");
+        .doc(
+            "an image (NRRD, NIfTI; the label map the mesh was made from, the pre-operative MRI) on whose grid the "
+            "run's displacement is written after the run, as displacement_field.nrrd or .nii.gz (what mtled field "
+            "--like IMAGE writes; docs/label-maps.md); the mesh must record its frame, as a label-map mesh does")
+        .to<&OutputSettings::displacement_field_like>();
     d.string("displacement_field_format")
         .defaults("nrrd")
         .choices({"nrrd", "nifti"})
-        .doc("displacement_field.nrrd (LPS, the form 3D Slicer saves grid transforms in) or displacement_field.nii.gz "
-             "(NIfTI, intent DISPVECT, RAS)");
+        .doc(
+            "displacement_field.nrrd (LPS, the form 3D Slicer saves grid transforms in) or displacement_field.nii.gz "
+            "(NIfTI, intent DISPVECT, RAS)")
+        .to<&OutputSettings::displacement_field_format>();
     d.string("displacement_field_direction")
         .defaults("resampling")
         .choices({"resampling", "forward"})
-        .doc("resampling: at each voxel of the deformed body the step back to its reference point, what Slicer and "
-             "ITK resample an image with; forward: at each voxel of the reference body where its material goes");
+        .doc(
+            "resampling: at each voxel of the deformed body the step back to its reference point, what Slicer and "
+            "ITK resample an image with; forward: at each voxel of the reference body where its material goes")
+        .to<&OutputSettings::displacement_field_direction>();
     d.number("displacement_field_decay")
         .defaults(0.01)
         .non_negative()
         .unit("m")
-        .doc("outside the body the field is the nearest surface value fading to zero over this distance; 0: zero "
-             "outside");
+        .doc(
+            "outside the body the field is the nearest surface value fading to zero over this distance; 0: zero "
+            "outside")
+        .to<&OutputSettings::displacement_field_decay>();
     return d;
   }();
   return {"output", &declaration};
 }
 
 VtuStyle vtu_style(const Parameters& output) {
-  return {output.string("vtu_format") == "ascii" ? VtuFormat::ascii : VtuFormat::binary,
-          output.string("length_unit") == "mm" ? LengthUnit::millimetre : LengthUnit::metre};
+  const auto settings = output.read<OutputSettings>();
+  return {settings.vtu_format == "ascii" ? VtuFormat::ascii : VtuFormat::binary,
+          settings.length_unit == "mm" ? LengthUnit::millimetre : LengthUnit::metre};
 }
 
 void OutputWriter::after_run(const StepRecord& last) { finish(last); }
@@ -102,7 +118,7 @@ void reaction_rows(const StepRecord& step, std::span<const NodalConstraints* con
 }  // namespace
 
 HistoryWriter::HistoryWriter(const OutputFolder& folder, const Parameters& output)
-    : folder_(folder), every_(output.integer("history_every_steps")) {}
+    : folder_(folder), every_(output.read<OutputSettings>().history_every_steps) {}
 
 void HistoryWriter::before_run(const RunContext& run, const StepRecord& initial) {
   constraint_sets_ = run.constraint_sets;
@@ -158,9 +174,9 @@ void HistoryWriter::record_equilibrium(const StepRecord& step) {
 SnapshotWriter::SnapshotWriter(const OutputFolder& folder, const Parameters& output, const ForceKernel& kernel)
     : folder_(folder),
       kernel_(kernel),
-      every_(output.integer("every_steps")),
+      every_(output.read<OutputSettings>().every_steps),
       style_(vtu_style(output)),
-      cell_data_(output.string_list("cell_data")) {}
+      cell_data_(output.read<OutputSettings>().cell_data) {}
 
 // The series starts with the initial state.
 void SnapshotWriter::before_run(const RunContext&, const StepRecord& initial) { snapshot(initial); }
@@ -196,7 +212,7 @@ std::vector<std::shared_ptr<OutputWriter>> add_scene_writers(Simulation& simulat
   const Parameters& output = scene.section("output");
   std::vector<std::shared_ptr<OutputWriter>> writers;
   writers.push_back(std::make_shared<HistoryWriter>(folder, output));  // opens only the files the run has rows for
-  if (output.integer("every_steps") > 0)
+  if (output.read<OutputSettings>().every_steps > 0)
     writers.push_back(std::make_shared<SnapshotWriter>(folder, output, simulation.system().force_kernel()));
   for (const auto& writer : writers) simulation.loop().add_monitor(writer);
   return writers;
@@ -210,7 +226,8 @@ std::vector<double> write_state(const OutputFolder& folder, const std::string& f
   const Discretisation& model = kernel.discretisation();
   std::vector<double> interpolated(u.size());
   model.interpolate(u, interpolated);
-  auto fields = with_cell_data ? cell_fields(kernel, u, output.string_list("cell_data")) : std::vector<CellField>{};
+  auto fields =
+      with_cell_data ? cell_fields(kernel, u, output.read<OutputSettings>().cell_data) : std::vector<CellField>{};
   fields.insert(fields.end(), extra_fields.begin(), extra_fields.end());
   folder.write_file(file, [&](std::ostream& out) { write_vtu(out, model.mesh(), interpolated, fields, vtu_style(output)); });
   return interpolated;

@@ -18,7 +18,8 @@ void InversionMonitor::declare(ComponentDeclaration& d) {
       .doc(
           "move the background tets by the interpolated displacements at their vertices every this many steps and "
           "after the last, and find those turned inside out: material folded between integration points, which no "
-          "point's J shows; 0 turns the check off");
+          "point's J shows; 0 turns the check off")
+      .to<&Settings::inversion_every_steps>();
   d.string("inversion")
       .defaults("stop")
       .choices({"warn", "stop"})
@@ -30,14 +31,16 @@ void InversionMonitor::declare(ComponentDeclaration& d) {
           "counted as cut (monitors.inversion.cut_tets), not folds. Slivers (radius ratio under 0.1; the shipped "
           "scenes' meshes have none) are not judged: they turn over when the interpolated field departs from affine by "
           "their thickness, which a relaxation's transient does without the material folding "
-          "(monitors.inversion.slivers_inverted)");
+          "(monitors.inversion.slivers_inverted)")
+      .to<&Settings::inversion>();
 }
 
 std::unique_ptr<InversionMonitor> InversionMonitor::from_section(const Parameters& monitors, FoldAdvice advice,
                                                                  std::shared_ptr<FoldedTets> folded) {
-  const long every = monitors.integer("inversion_every_steps");
-  if (every == 0) return nullptr;
-  return std::make_unique<InversionMonitor>(every, monitors.string("inversion") == "stop", advice, std::move(folded));
+  const auto settings = monitors.read<Settings>();
+  if (settings.inversion_every_steps == 0) return nullptr;
+  return std::make_unique<InversionMonitor>(settings.inversion_every_steps, settings.inversion == "stop", advice,
+                                            std::move(folded));
 }
 
 namespace {

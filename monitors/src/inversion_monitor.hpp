@@ -41,8 +41,12 @@ FoldAdvice fold_advice(const Scene& scene);
 
 class InversionMonitor final : public StepMonitor {
  public:
-  // Its parameters in the scene's "monitors" section.
+  // Its parameters in the scene's "monitors" section, read into Settings.
   static void declare(ComponentDeclaration& d);
+  struct Settings {
+    long inversion_every_steps = 0;
+    std::string inversion;
+  };
   // The monitor the section asks for; null when inversion_every_steps is 0. When it stops a run it marks the folded
   // tets in `folded`.
   static std::unique_ptr<InversionMonitor> from_section(const Parameters& monitors, FoldAdvice advice,

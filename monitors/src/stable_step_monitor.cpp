@@ -20,35 +20,40 @@ void StableStepMonitor::declare(ComponentDeclaration& d) {
       .defaults(2000)
       .non_negative()
       .unit("1")
-      .doc("re-estimate the stable time step 2 / sqrt(lambda_max(M^-1 K)) of the current, deformed body at step 1 and "
-           "then every this many steps, by Lanczos iteration on finite differences of the internal forces (see "
-           "stable_step for what follows); 0 turns the re-estimate off");
+      .doc(
+          "re-estimate the stable time step 2 / sqrt(lambda_max(M^-1 K)) of the current, deformed body at step 1 and "
+          "then every this many steps, by Lanczos iteration on finite differences of the internal forces (see "
+          "stable_step for what follows); 0 turns the re-estimate off")
+      .to<&Settings::stable_step_every_steps>();
   d.string("stable_step")
       .defaults("follow")
       .choices({"follow", "adapt", "stop"})
-      .doc("what a re-estimate does: \"adapt\" lowers the integrator's step to its margin of the estimate (0.9 for "
-           "dynamic_relaxation, 0.5 for central_difference) when the step exceeds that (the margin covers the "
-           "estimate's few percent, stiffening until the next re-estimate and, for central differences, the "
-           "unsymmetric stiffness); \"follow\" also raises a steady-state integrator's step to that margin while "
-           "its loads are held (re-estimated once as each hold begins, put back when the loads move again): the "
-           "relaxation then takes fewer steps to the same steady state; \"stop\" ends the run (status "
-           "\"unstable\", what \"time_step_above_stable\") when the step exceeds the estimate by more than 5%");
+      .doc(
+          "what a re-estimate does: \"adapt\" lowers the integrator's step to its margin of the estimate (0.9 for "
+          "dynamic_relaxation, 0.5 for central_difference) when the step exceeds that (the margin covers the "
+          "estimate's few percent, stiffening until the next re-estimate and, for central differences, the "
+          "unsymmetric stiffness); \"follow\" also raises a steady-state integrator's step to that margin while "
+          "its loads are held (re-estimated once as each hold begins, put back when the loads move again): the "
+          "relaxation then takes fewer steps to the same steady state; \"stop\" ends the run (status "
+          "\"unstable\", what \"time_step_above_stable\") when the step exceeds the estimate by more than 5%")
+      .to<&Settings::stable_step>();
   d.integer("stable_step_iterations")
       .defaults(20)
       .between(2, 200)
       .unit("1")
-      .doc("Lanczos vectors per re-estimate (each one internal-force evaluation and one vector of memory); each "
-           "estimate starts from the previous one's Ritz vector; the first, from a random one, uses three times as many");
+      .doc(
+          "Lanczos vectors per re-estimate (each one internal-force evaluation and one vector of memory); each "
+          "estimate starts from the previous one's Ritz vector; the first, from a random one, uses three times as many")
+      .to<&Settings::stable_step_iterations>();
 }
 
 std::unique_ptr<StableStepMonitor> StableStepMonitor::from_section(const Parameters& monitors,
                                                                    const Discretisation& model) {
-  const long every = monitors.integer("stable_step_every_steps");
-  if (every == 0) return nullptr;
+  const auto settings = monitors.read<Settings>();
+  if (settings.stable_step_every_steps == 0) return nullptr;
   // 1e-7 of the body's size: far inside the linear range of any element, far above round-off in the forces.
-  const std::string response = monitors.string("stable_step");  // one of the choices (validated)
-  const auto named = std::find(std::begin(kResponseNames), std::end(kResponseNames), response);
-  return std::make_unique<StableStepMonitor>(every, static_cast<int>(monitors.integer("stable_step_iterations")),
+  const auto named = std::find(std::begin(kResponseNames), std::end(kResponseNames), settings.stable_step);
+  return std::make_unique<StableStepMonitor>(settings.stable_step_every_steps, settings.stable_step_iterations,
                                              1e-7 * model.cloud().length_scale,
                                              static_cast<Response>(named - std::begin(kResponseNames)));
 }

@@ -17,8 +17,13 @@ namespace mtled {
 
 class StableStepMonitor final : public StepMonitor {
  public:
-  // Its parameters in the scene's "monitors" section.
+  // Its parameters in the scene's "monitors" section, read into Settings.
   static void declare(ComponentDeclaration& d);
+  struct Settings {
+    long stable_step_every_steps = 0;
+    std::string stable_step;  // one of the choices (validated)
+    int stable_step_iterations = 0;
+  };
   // The monitor the section asks for; null when stable_step_every_steps is 0.
   static std::unique_ptr<StableStepMonitor> from_section(const Parameters& monitors, const Discretisation& model);
   // `perturbation_length`: the largest nodal perturbation of the force differences (m).

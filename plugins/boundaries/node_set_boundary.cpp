@@ -13,9 +13,12 @@ void NodeSetBoundary::declare_selection(ComponentDeclaration& d) {
   d.string_list("components")
       .defaults(json::array({"x", "y", "z"}))
       .choices({"x", "y", "z"})
-      .doc("displacement components prescribed; the others stay free (e.g. [\"z\"] for a frictionless support)");
-  d.string("name").optional().doc(
-      "label of this set in reactions.csv and summary.json; default: the group name, or the selector's shape");
+      .doc("displacement components prescribed; the others stay free (e.g. [\"z\"] for a frictionless support)")
+      .to<&Selection::components>();
+  d.string("name")
+      .optional()
+      .doc("label of this set in reactions.csv and summary.json; default: the group name, or the selector's shape")
+      .to<&Selection::name>();
 }
 
 NodeSetBoundary::NodeSetBoundary(const Parameters& parameters, Vec3 final_displacement, Mat3 final_gradient)
@@ -23,13 +26,13 @@ NodeSetBoundary::NodeSetBoundary(const Parameters& parameters, Vec3 final_displa
       selector_(NodeSelector::from(parameters, "nodes")),
       final_displacement_(final_displacement),
       final_gradient_(final_gradient) {
-  const auto components = parameters.string_list("components");
+  const auto [components, name] = parameters.read<Selection>();
   if (components.empty())
     throw InputError(parameters.pointer("components"), "give at least one of \"x\", \"y\", \"z\"");
   std::array<bool, 3> constrained{false, false, false};
   for (const auto& c : components) constrained[static_cast<std::size_t>(c[0] - 'x')] = true;
   set_.set_components(constrained);
-  if (const auto name = parameters.optional_string("name")) {
+  if (name) {
     set_.name = *name;
   } else if (selector_.kind == NodeSelector::Kind::group) {
     set_.name = selector_.group;

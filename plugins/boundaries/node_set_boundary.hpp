@@ -8,8 +8,13 @@ namespace mtled {
 
 class NodeSetBoundary : public BoundaryCondition {
  public:
-  // Declares "nodes", "components" and "name" (shared by both plugins).
+  // Declares "nodes", "components" and "name" (shared by both plugins); "nodes" is read by NodeSelector::from, the
+  // others into Selection.
   static void declare_selection(ComponentDeclaration& d);
+  struct Selection {
+    std::vector<std::string> components;
+    std::optional<std::string> name;
+  };
   NodeSetBoundary(const Parameters& parameters, Vec3 final_displacement, Mat3 final_gradient = Mat3::Zero());
 
   void setup(const Discretisation& model) override;

@@ -12,18 +12,30 @@ class PrescribedDisplacementBoundary final : public NodeSetBoundary {
         "Moves a node set by a displacement that grows with the integrator's load curve from 0 to `displacement`; "
         "components not listed stay free.");
     declare_selection(d);
-    d.vector3("displacement").unit("m").doc("displacement of the node set at full load (plus gradient X)");
-    d.number_list("gradient").unit("1").optional().doc(
-        "displacement gradient G (9 numbers, row by row) of an affine field d + G X at full load; default 0");
+    d.vector3("displacement")
+        .unit("m")
+        .doc("displacement of the node set at full load (plus gradient X)")
+        .to<&Settings::displacement>();
+    d.number_list("gradient")
+        .unit("1")
+        .optional()
+        .doc("displacement gradient G (9 numbers, row by row) of an affine field d + G X at full load; default 0")
+        .to<&Settings::gradient>();
     d.example({{"nodes", {{"group", "top"}}}, {"displacement", {0.0, 0.0, -0.002}}, {"components", {"z"}}});
   }
   explicit PrescribedDisplacementBoundary(const Parameters& parameters)
-      : NodeSetBoundary(parameters, parameters.vector3("displacement"), read_gradient(parameters)) {}
+      : NodeSetBoundary(parameters, parameters.read<Settings>().displacement, read_gradient(parameters)) {}
 
  private:
+  struct Settings {
+    Vec3 displacement = Vec3::Zero();
+    std::optional<std::vector<double>> gradient;
+  };
+
   static Mat3 read_gradient(const Parameters& parameters) {
-    if (!parameters.has("gradient")) return Mat3::Zero();
-    const auto g = parameters.number_list("gradient");
+    const auto given = parameters.read<Settings>().gradient;
+    if (!given) return Mat3::Zero();
+    const std::vector<double>& g = *given;
     if (g.size() != 9)
       throw InputError(parameters.pointer("gradient"),
                        "expected 9 numbers, the gradient's rows one after another: [Gxx, Gxy, Gxz, Gyx, ...]");

@@ -35,103 +35,50 @@ class KinematicNeedle final : public NeedleModel {
         .unit("1")
         .between(0.0, 1.0)
         .defaults(0.4)
-        .doc("C_D: tissue beside the shaft moves this fraction of the needle's advance (the paper: 0.4, from "
-             "X-ray images of Sylgard 527)");
+        .doc(
+            "C_D: tissue beside the shaft moves this fraction of the needle's advance (the paper: 0.4, from "
+            "X-ray images of Sylgard 527)")
+        .to<&Settings::deformation_coefficient>();
     d.number("puncture_strain")
         .unit("1")
         .non_negative()
         .defaults(1e-5)
-        .doc("epsilon_p: the needle punctures the surface when the largest principal Green strain near the tip "
-             "exceeds this (the paper: 1e-5, a very short indentation)");
+        .doc(
+            "epsilon_p: the needle punctures the surface when the largest principal Green strain near the tip "
+            "exceeds this (the paper: 1e-5, a very short indentation)")
+        .to<&Settings::puncture_strain>();
     d.string("drive")
         .defaults("from_reference")
         .choices({"since_capture", "from_reference"})
-        .doc("since_capture: a node is captured when the tip reaches its current axial position and then moves "
-             "C_D times the advance since; from_reference: captured when the tip reaches its reference axial "
-             "position s, its axial displacement is then C_D x (advance - s) once that exceeds what it had at "
-             "capture, so the final driven displacements depend on the geometry alone, not on the material");
+        .doc(
+            "since_capture: a node is captured when the tip reaches its current axial position and then moves "
+            "C_D times the advance since; from_reference: captured when the tip reaches its reference axial "
+            "position s, its axial displacement is then C_D x (advance - s) once that exceeds what it had at "
+            "capture, so the final driven displacements depend on the geometry alone, not on the material")
+        .to<&Settings::drive>();
     d.string("lateral")
         .defaults("path")
         .choices({"held", "path", "free"})
-        .doc("a driven node's displacement across the axis: held at its value at capture; path: returned to "
-             "zero (the tissue stays on the straight needle's path) over one node spacing of advance; free: "
-             "only the axial component is prescribed (needs a direction along a coordinate axis)");
+        .doc(
+            "a driven node's displacement across the axis: held at its value at capture; path: returned to "
+            "zero (the tissue stays on the straight needle's path) over one node spacing of advance; free: "
+            "only the axial component is prescribed (needs a direction along a coordinate axis)")
+        .to<&Settings::lateral>();
     d.string("driven")
         .defaults("shaft_surface")
         .choices({"nodes_near_axis", "shaft_surface"})
-        .doc("what the shaft drives: nodes_near_axis, the nodes within capture_radius of the axis (the paper's "
-             "\"nodes located close to the needle shaft\"); shaft_surface, material points on rings on the "
-             "shaft's surface (radius = the needle's, one ring per node spacing at the entry, about one point per "
-             "node spacing around), whose interpolated displacement is prescribed: the same needle on every cloud, "
-             "symmetric about its axis");
-    d.number("drag_limit")
-        .unit("m")
-        .positive()
-        .optional()
-        .doc("not in the paper: tissue on the shaft is dragged at C_D until its axial displacement reaches this, "
-             "then slips along the shaft and stays there (a sticking interface that gives way). Default: no limit, "
-             "the paper's model, under which the tissue at the entry is dragged C_D x depth (40 mm at 100 mm), "
-             "enough shear to fold the tissue beside the entry on some clouds (docs/stability.md). The paper's "
-             "experiments drag at most 0.4 x 15 mm = 6 mm, so a limit of 6 mm or more leaves them unchanged");
-    d.integer("settle_steps")
-        .unit("1")
-        .at_least(1)
-        .optional()
-        .doc("with drive = from_reference: an entry captured at its current displacement moves to C_D x (advance - s) "
-             "along the axis (and, with lateral = path, onto the path) over this many time steps, whether the load "
-             "advances or is held, so the relaxed state does not depend on how fast the load was ramped. Default: "
-             "none, the captured axial displacement stays a floor under C_D x (advance - s), which the ramp rate "
-             "changes (docs/validation.md)");
-    d.number("capture_radius")
-        .unit("m")
-        .positive()
-        .optional()
-        .doc("with driven = nodes_near_axis, nodes within this distance of the needle axis are driven once the tip "
-             "passes them; the footprint (the surface nodes the tip indents) is chosen within it too; default: the "
-             "larger of the needle radius and 0.6 x the node spacing at the entry, so a coarse cloud still has "
-             "nodes on the path");
-    d.number("strain_radius")
-        .unit("m")
-        .positive()
-        .optional()
-        .doc("integration points within this distance of the tip are watched for the puncture strain; default: "
-             "the larger of the needle diameter and the node spacing at the entry");
+        .doc(
+            "what the shaft drives: nodes_near_axis, the nodes within capture_radius of the axis (the paper's "
+            "\"nodes located close to the needle shaft\"); shaft_surface, material points on rings on the "
+            "shaft's surface (radius = the needle's, one ring per node spacing at the entry, about one point per "
+            "node spacing around), whose interpolated displacement is prescribed: the same needle on every cloud, "
+            "symmetric about its axis")
+        .to<&Settings::driven>();
+    declare_limits_and_radii(d);
     d.example({{"entry", {0.0, 0.0, 0.017}}, {"depth", 0.005}});
   }
 
-  explicit KinematicNeedle(const Parameters& p)
-      : parameters_(p),
-        path_(read_needle_path(p)),
-        coefficient_(p.number("deformation_coefficient")),
-        puncture_strain_(p.number("puncture_strain")),
-        drag_limit_(p.optional_number("drag_limit")),
-        settle_steps_(p.has("settle_steps") ? std::optional<long>(p.integer("settle_steps")) : std::nullopt),
-        capture_radius_option_(p.optional_number("capture_radius")),
-        strain_radius_option_(p.optional_number("strain_radius")),
-        from_reference_(p.string("drive") == "from_reference"),
-        return_to_path_(p.string("lateral") == "path"),
-        shaft_surface_(p.string("driven") == "shaft_surface") {
-    nodes_.constraints.name = "needle";
-    shaft_.constraints.name = "needle_shaft";
-    if (p.string("lateral") == "free") {
-      // The kernel constrains whole Cartesian components, so "axial only" needs an axis-aligned needle.
-      const Vec3 d = path_.direction.cwiseAbs();
-      Index axis = 0;
-      d.maxCoeff(&axis);
-      if (d[axis] < 1.0 - 1e-12)
-        throw InputError(p.pointer("lateral"),
-                         fmt::format("\"free\" prescribes only the axial component, which needs a direction along "
-                                     "x, y or z; got ({:g}, {:g}, {:g}). Use \"held\" or \"path\", or rotate the "
-                                     "scene so that the needle runs along a coordinate axis",
-                                     path_.direction.x(), path_.direction.y(), path_.direction.z()));
-      nodes_.constraints.set_components({axis == 0, axis == 1, axis == 2});
-      shaft_.constraints.set_components({axis == 0, axis == 1, axis == 2});
-    }
-    if (settle_steps_ && !from_reference_)
-      throw InputError(p.pointer("settle_steps"),
-                       "settling onto the prescription needs a prescription that does not depend on the capture: "
-                       "set \"drive\" to \"from_reference\" (the default), or leave settle_steps out");
-  }
+  explicit KinematicNeedle(const Parameters& p) : KinematicNeedle(p, p.read<Settings>()) {}
 
   void setup(const Discretisation& model) override {
     place_needle_path(path_, model, parameters_);
@@ -231,6 +178,93 @@ class KinematicNeedle final : public NeedleModel {
   }
 
  private:
+  struct Settings {
+    double deformation_coefficient = 0.0;
+    double puncture_strain = 0.0;
+    std::string drive, lateral, driven;
+    std::optional<double> drag_limit;
+    std::optional<long> settle_steps;
+    std::optional<double> capture_radius, strain_radius;
+  };
+
+  // What the paper leaves open: how far the shaft drags, how captured entries settle, the capture and strain radii.
+  static void declare_limits_and_radii(ComponentDeclaration& d) {
+    d.number("drag_limit")
+        .unit("m")
+        .positive()
+        .optional()
+        .doc(
+            "not in the paper: tissue on the shaft is dragged at C_D until its axial displacement reaches this, "
+            "then slips along the shaft and stays there (a sticking interface that gives way). Default: no limit, "
+            "the paper's model, under which the tissue at the entry is dragged C_D x depth (40 mm at 100 mm), "
+            "enough shear to fold the tissue beside the entry on some clouds (docs/stability.md). The paper's "
+            "experiments drag at most 0.4 x 15 mm = 6 mm, so a limit of 6 mm or more leaves them unchanged")
+        .to<&Settings::drag_limit>();
+    d.integer("settle_steps")
+        .unit("1")
+        .at_least(1)
+        .optional()
+        .doc(
+            "with drive = from_reference: an entry captured at its current displacement moves to C_D x (advance - s) "
+            "along the axis (and, with lateral = path, onto the path) over this many time steps, whether the load "
+            "advances or is held, so the relaxed state does not depend on how fast the load was ramped. Default: "
+            "none, the captured axial displacement stays a floor under C_D x (advance - s), which the ramp rate "
+            "changes (docs/validation.md)")
+        .to<&Settings::settle_steps>();
+    d.number("capture_radius")
+        .unit("m")
+        .positive()
+        .optional()
+        .doc(
+            "with driven = nodes_near_axis, nodes within this distance of the needle axis are driven once the tip "
+            "passes them; the footprint (the surface nodes the tip indents) is chosen within it too; default: the "
+            "larger of the needle radius and 0.6 x the node spacing at the entry, so a coarse cloud still has "
+            "nodes on the path")
+        .to<&Settings::capture_radius>();
+    d.number("strain_radius")
+        .unit("m")
+        .positive()
+        .optional()
+        .doc(
+            "integration points within this distance of the tip are watched for the puncture strain; default: "
+            "the larger of the needle diameter and the node spacing at the entry")
+        .to<&Settings::strain_radius>();
+  }
+
+  KinematicNeedle(const Parameters& p, const Settings& s)
+      : parameters_(p),
+        path_(read_needle_path(p)),
+        coefficient_(s.deformation_coefficient),
+        puncture_strain_(s.puncture_strain),
+        drag_limit_(s.drag_limit),
+        settle_steps_(s.settle_steps),
+        capture_radius_option_(s.capture_radius),
+        strain_radius_option_(s.strain_radius),
+        from_reference_(s.drive == "from_reference"),
+        return_to_path_(s.lateral == "path"),
+        shaft_surface_(s.driven == "shaft_surface") {
+    nodes_.constraints.name = "needle";
+    shaft_.constraints.name = "needle_shaft";
+    if (s.lateral == "free") {
+      // The kernel constrains whole Cartesian components, so "axial only" needs an axis-aligned needle.
+      const Vec3 d = path_.direction.cwiseAbs();
+      Index axis = 0;
+      d.maxCoeff(&axis);
+      if (d[axis] < 1.0 - 1e-12)
+        throw InputError(p.pointer("lateral"),
+                         fmt::format("\"free\" prescribes only the axial component, which needs a direction along "
+                                     "x, y or z; got ({:g}, {:g}, {:g}). Use \"held\" or \"path\", or rotate the "
+                                     "scene so that the needle runs along a coordinate axis",
+                                     path_.direction.x(), path_.direction.y(), path_.direction.z()));
+      nodes_.constraints.set_components({axis == 0, axis == 1, axis == 2});
+      shaft_.constraints.set_components({axis == 0, axis == 1, axis == 2});
+    }
+    if (settle_steps_ && !from_reference_)
+      throw InputError(p.pointer("settle_steps"),
+                       "settling onto the prescription needs a prescription that does not depend on the capture: "
+                       "set \"drive\" to \"from_reference\" (the default), or leave settle_steps out");
+  }
+
   // A constraint set the needle drives and, per entry, what its law needs.
   struct DrivenSet {
     NodalConstraints constraints;

@@ -14,18 +14,38 @@
 namespace mtled {
 
 void declare_needle_path(ComponentDeclaration& d) {
-  d.number("diameter").unit("m").positive().defaults(1.6e-3).doc("needle shaft diameter (the paper: 1.6 mm)");
-  d.vector3("entry").unit("m").optional().doc(
-      "point on the body surface where the tip enters (reference coordinates); give it or trajectory");
-  d.vector3("direction").unit("1").nonzero().optional().doc(
-      "insertion direction (normalised internally); default (0, 0, -1), or from the trajectory");
-  d.number("depth").unit("m").positive().optional().doc(
-      "final insertion depth: the tip's advance from the entry point; needed with entry, with trajectory the "
-      "distance from its entry to its target unless given");
-  d.file("trajectory").optional().doc(
-      "instead of entry and direction: a 3D Slicer markups file (.mrk.json) whose line (or first two points) runs "
-      "from the entry to the target, in its coordinateSystem (LPS or RAS) and coordinateUnits (mm); placed in the "
-      "mesh's frame when the mesh records one (a label map's)");
+  d.number("diameter")
+      .unit("m")
+      .positive()
+      .defaults(1.6e-3)
+      .doc("needle shaft diameter (the paper: 1.6 mm)")
+      .to<&NeedlePathSettings::diameter>();
+  d.vector3("entry")
+      .unit("m")
+      .optional()
+      .doc("point on the body surface where the tip enters (reference coordinates); give it or trajectory")
+      .to<&NeedlePathSettings::entry>();
+  d.vector3("direction")
+      .unit("1")
+      .nonzero()
+      .optional()
+      .doc("insertion direction (normalised internally); default (0, 0, -1), or from the trajectory")
+      .to<&NeedlePathSettings::direction>();
+  d.number("depth")
+      .unit("m")
+      .positive()
+      .optional()
+      .doc(
+          "final insertion depth: the tip's advance from the entry point; needed with entry, with trajectory the "
+          "distance from its entry to its target unless given")
+      .to<&NeedlePathSettings::depth>();
+  d.file("trajectory")
+      .optional()
+      .doc(
+          "instead of entry and direction: a 3D Slicer markups file (.mrk.json) whose line (or first two points) runs "
+          "from the entry to the target, in its coordinateSystem (LPS or RAS) and coordinateUnits (mm); placed in the "
+          "mesh's frame when the mesh records one (a label map's)")
+      .to<&NeedlePathSettings::trajectory>();
 }
 
 namespace {
@@ -56,29 +76,31 @@ MarkupsTrajectory parse_markups_trajectory(const std::string& text, const std::s
 }
 
 NeedlePath read_needle_path(const Parameters& p) {
+  const auto given = p.read<NeedlePathSettings>();
   NeedlePath path;
-  path.radius = 0.5 * p.number("diameter");
-  if (const auto file = p.optional_file("trajectory")) {
-    for (const char* given : {"entry", "direction"})
-      if (p.has(given))
-        throw InputError(p.pointer(given), fmt::format("give either \"trajectory\" or \"entry\" and \"direction\", "
-                                                       "not both: the trajectory's line sets the {}",
-                                                       given));
-    const MarkupsTrajectory trajectory = read_markups_trajectory(*file);
+  path.radius = 0.5 * given.diameter;
+  if (given.trajectory) {
+    for (const auto& [name, value] : {std::pair{"entry", given.entry}, std::pair{"direction", given.direction}})
+      if (value)
+        throw InputError(p.pointer(name), fmt::format("give either \"trajectory\" or \"entry\" and \"direction\", "
+                                                      "not both: the trajectory's line sets the {}",
+                                                      name));
+    const MarkupsTrajectory trajectory = read_markups_trajectory(*given.trajectory);
     path.frame = trajectory.frame;
+    path.trajectory = *given.trajectory;
     path.entry = trajectory.entry;
     path.direction = (trajectory.target - trajectory.entry).normalized();
-    path.depth = p.optional_number("depth").value_or((trajectory.target - trajectory.entry).norm());
+    path.depth = given.depth.value_or((trajectory.target - trajectory.entry).norm());
     return path;
   }
-  if (!p.has("entry"))
+  if (!given.entry)
     throw InputError(p.pointer("entry"), "missing: the needle needs \"entry\" (m, a point on the body's surface) or "
                                          "\"trajectory\" (a 3D Slicer markups file from the entry to the target)");
-  if (!p.has("depth"))
+  if (!given.depth)
     throw InputError(p.pointer("depth"), "missing: how far the tip advances from the entry (m), e.g. 0.02");
-  path.entry = p.vector3("entry");
-  path.direction = p.optional_vector3("direction").value_or(-Vec3::UnitZ()).normalized();
-  path.depth = p.number("depth");
+  path.entry = *given.entry;
+  path.direction = given.direction.value_or(-Vec3::UnitZ()).normalized();
+  path.depth = *given.depth;
   return path;
 }
 
@@ -119,11 +141,12 @@ void place_needle_path(NeedlePath& path, const Discretisation& model, const Para
   const bool from_markups = !path.frame.empty();
   const std::string frame_said = mesh_frame.empty() ? path.frame + " as given: the mesh records none" : mesh_frame;
   if (from_markups)  // say where the markups put it, in the mesh's coordinates
-    log().info("needle trajectory {}: entry ({:.6g}, {:.6g}, {:.6g}) m, direction ({:.4g}, {:.4g}, {:.4g}), depth {:.4g} mm, "
-               "in the mesh's frame ({})",
-               p.file("trajectory").filename().string(), path.entry[0], path.entry[1], path.entry[2],
-               path.direction[0] + 0.0, path.direction[1] + 0.0, path.direction[2] + 0.0, 1e3 * path.depth,  // no "-0"
-               frame_said);
+    log().info(
+        "needle trajectory {}: entry ({:.6g}, {:.6g}, {:.6g}) m, direction ({:.4g}, {:.4g}, {:.4g}), depth {:.4g} mm, "
+        "in the mesh's frame ({})",
+        path.trajectory.filename().string(), path.entry[0], path.entry[1], path.entry[2], path.direction[0] + 0.0,
+        path.direction[1] + 0.0, path.direction[2] + 0.0, 1e3 * path.depth,  // no "-0"
+        frame_said);
   const auto& surface = model.cloud().surface;
   std::vector<Index> nearest;
   model.cloud().search->nearest(path.entry, 64, nearest);

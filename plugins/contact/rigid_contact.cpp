@@ -77,28 +77,32 @@ class RigidContactNeedle final : public NeedleModel {
         .defaults(15.0)
         .doc(
             "half-angle of the conical tip, in degrees: the cone is r / tan(angle) long and pushes the tissue "
-            "out to the shaft radius gradually (15: a sharp conical or bevel-like point)");
+            "out to the shaft radius gradually (15: a sharp conical or bevel-like point)")
+        .to<&Settings::tip_angle>();
     d.number("friction_coefficient")
         .unit("1")
         .between(0.0, 2.0)
         .defaults(0.3)
         .doc(
             "Coulomb friction coefficient mu between the needle and the tissue (0.3: the static coefficient "
-            "measured for needles in agarose gel, 0.30 +- 0.06; 0 gives a frictionless needle)");
+            "measured for needles in agarose gel, 0.30 +- 0.06; 0 gives a frictionless needle)")
+        .to<&Settings::friction_coefficient>();
     d.number("puncture_strain")
         .unit("1")
         .non_negative()
         .defaults(1e-5)
         .doc(
             "epsilon_p: the tip punctures the surface when the largest principal Green strain near the tip "
-            "exceeds this (as the kinematic model; the paper: 1e-5); ignored when puncture_force is given");
+            "exceeds this (as the kinematic model; the paper: 1e-5); ignored when puncture_force is given")
+        .to<&Settings::puncture_strain>();
     d.number("puncture_force")
         .unit("N")
         .positive()
         .optional()
         .doc(
             "if given, the tip punctures the surface when the axial contact force (averaged over about ten "
-            "steps) exceeds this, instead of the strain criterion (a measured puncture force)");
+            "steps) exceeds this, instead of the strain criterion (a measured puncture force)")
+        .to<&Settings::puncture_force>();
     d.number("footprint_radius")
         .unit("m")
         .positive()
@@ -106,7 +110,8 @@ class RigidContactNeedle final : public NeedleModel {
         .doc(
             "surface nodes within this distance of the axis at the entry are pinned to the tip until puncture; "
             "default: the larger of the needle radius and 0.6 x the node spacing at the entry (as the kinematic "
-            "model's capture radius), so a coarse cloud still has a node under the tip");
+            "model's capture radius), so a coarse cloud still has a node under the tip")
+        .to<&Settings::footprint_radius>();
     d.number("capture_radius")
         .unit("m")
         .positive()
@@ -115,52 +120,28 @@ class RigidContactNeedle final : public NeedleModel {
             "after puncture, nodes within this distance of the axis join the contact when the tip passes them "
             "(the layer of tissue beside the shaft; nodes the needle's volume reaches join in any case); default: "
             "the larger of the needle radius and 0.6 x the node spacing at the entry (as the kinematic model), so "
-            "a coarse cloud still has a line of nodes along the shaft");
+            "a coarse cloud still has a line of nodes along the shaft")
+        .to<&Settings::capture_radius>();
     d.number("strain_radius")
         .unit("m")
         .positive()
         .optional()
         .doc(
             "integration points within this distance of the tip are watched for the puncture strain; default: "
-            "the larger of the needle diameter and the node spacing at the entry");
+            "the larger of the needle diameter and the node spacing at the entry")
+        .to<&Settings::strain_radius>();
     d.integer("release_steps")
         .unit("1")
         .at_least(1)
         .defaults(20)
         .doc(
             "a contact node whose normal force is tensile (the tissue pulls on the needle) for this many "
-            "consecutive steps leaves the contact");
+            "consecutive steps leaves the contact")
+        .to<&Settings::release_steps>();
     d.example({{"entry", {0.0, 0.0, 0.017}}, {"depth", 0.005}});
   }
 
-  explicit RigidContactNeedle(const Parameters& p)
-      : parameters_(p),
-        path_(read_needle_path(p)),
-        tan_tip_(std::tan(p.number("tip_angle") * std::numbers::pi / 180.0)),
-        cos_tip_(std::cos(p.number("tip_angle") * std::numbers::pi / 180.0)),
-        sin_tip_(std::sin(p.number("tip_angle") * std::numbers::pi / 180.0)),
-        mu_(p.number("friction_coefficient")),
-        puncture_strain_(p.number("puncture_strain")),
-        puncture_force_(p.optional_number("puncture_force")),
-        footprint_radius_option_(p.optional_number("footprint_radius")),
-        capture_radius_option_(p.optional_number("capture_radius")),
-        strain_radius_option_(p.optional_number("strain_radius")),
-        release_steps_(p.integer("release_steps")) {
-    if (capture_radius_option_ && *capture_radius_option_ < path_.radius)
-      throw InputError(
-          p.pointer("capture_radius"),
-          fmt::format("a capture radius of {:.3g} mm is below the needle's radius ({:.3g} mm): nodes inside "
-                      "the needle join the contact anyway; give at least the radius, or leave it out for "
-                      "the default (the larger of the radius and 0.6 x the node spacing at the entry)",
-                      1e3 * *capture_radius_option_, 1e3 * path_.radius));
-    if (footprint_radius_option_ && *footprint_radius_option_ < path_.radius)
-      throw InputError(p.pointer("footprint_radius"),
-                       fmt::format("a footprint radius of {:.3g} mm is below the needle's radius ({:.3g} mm): the tip "
-                                   "covers at least its own cross-section; give at least the radius, or leave it out "
-                                   "for the default",
-                                   1e3 * *footprint_radius_option_, 1e3 * path_.radius));
-    contact_.name = "needle";
-  }
+  explicit RigidContactNeedle(const Parameters& p) : RigidContactNeedle(p, p.read<Settings>()) {}
 
   void setup(const Discretisation& model) override {
     place_needle_path(path_, model, parameters_);
@@ -282,6 +263,43 @@ class RigidContactNeedle final : public NeedleModel {
   }
 
  private:
+  struct Settings {
+    double tip_angle = 0.0;
+    double friction_coefficient = 0.0;
+    double puncture_strain = 0.0;
+    std::optional<double> puncture_force, footprint_radius, capture_radius, strain_radius;
+    long release_steps = 0;
+  };
+
+  RigidContactNeedle(const Parameters& p, const Settings& s)
+      : parameters_(p),
+        path_(read_needle_path(p)),
+        tan_tip_(std::tan(s.tip_angle * std::numbers::pi / 180.0)),
+        cos_tip_(std::cos(s.tip_angle * std::numbers::pi / 180.0)),
+        sin_tip_(std::sin(s.tip_angle * std::numbers::pi / 180.0)),
+        mu_(s.friction_coefficient),
+        puncture_strain_(s.puncture_strain),
+        puncture_force_(s.puncture_force),
+        footprint_radius_option_(s.footprint_radius),
+        capture_radius_option_(s.capture_radius),
+        strain_radius_option_(s.strain_radius),
+        release_steps_(s.release_steps) {
+    if (capture_radius_option_ && *capture_radius_option_ < path_.radius)
+      throw InputError(
+          p.pointer("capture_radius"),
+          fmt::format("a capture radius of {:.3g} mm is below the needle's radius ({:.3g} mm): nodes inside "
+                      "the needle join the contact anyway; give at least the radius, or leave it out for "
+                      "the default (the larger of the radius and 0.6 x the node spacing at the entry)",
+                      1e3 * *capture_radius_option_, 1e3 * path_.radius));
+    if (footprint_radius_option_ && *footprint_radius_option_ < path_.radius)
+      throw InputError(p.pointer("footprint_radius"),
+                       fmt::format("a footprint radius of {:.3g} mm is below the needle's radius ({:.3g} mm): the tip "
+                                   "covers at least its own cross-section; give at least the radius, or leave it out "
+                                   "for the default",
+                                   1e3 * *footprint_radius_option_, 1e3 * path_.radius));
+    contact_.name = "needle";
+  }
+
   // Fraction of the controller's full correction applied per step (the node stiffness is a lower bound of
   // the constraint's response: time-step safety factors and neighbouring constraints stiffen it).
   static constexpr double kSlipRelaxation = 0.5;

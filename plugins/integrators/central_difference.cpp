@@ -14,22 +14,26 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
  public:
   static void declare(ComponentDeclaration& d) {
     d.summary("Explicit central differences in physical time, with mass-proportional damping and a load curve.");
-    d.number("duration").unit("s").positive().doc("simulated time");
+    d.number("duration").unit("s").positive().doc("simulated time").to<&Settings::duration>();
     declare_time_step_factor(d);
-    d.number("damping").unit("1/s").non_negative().defaults(0.0).doc(
-        "mass-proportional damping coefficient c in M u'' + c M u' + f_int = f_ext");
-    d.number("load_time").unit("s").positive().optional().doc(
-        "time over which the loads grow from 0 to full; default: the whole duration");
+    d.number("damping")
+        .unit("1/s")
+        .non_negative()
+        .defaults(0.0)
+        .doc("mass-proportional damping coefficient c in M u'' + c M u' + f_int = f_ext")
+        .to<&Settings::damping>();
+    d.number("load_time")
+        .unit("s")
+        .positive()
+        .optional()
+        .doc("time over which the loads grow from 0 to full; default: the whole duration")
+        .to<&Settings::load_time>();
     declare_load_curve(d);
     d.example({{"duration", 0.01}});
   }
 
   explicit CentralDifferenceIntegrator(const Parameters& p)
-      : duration_(p.number("duration")),
-        factor_(p.number("time_step_factor")),
-        damping_(p.number("damping")),
-        load_time_(p.optional_number("load_time").value_or(duration_)),
-        curve_(load_curve_from(p)) {}
+      : CentralDifferenceIntegrator(p.read<IntegratorCommon>(), p.read<Settings>()) {}
 
   void initialise(DiscreteSystem& system) override {
     stable_ = system.stable_time_step();
@@ -73,6 +77,19 @@ class CentralDifferenceIntegrator final : public TimeIntegrator {
   }
 
  private:
+  struct Settings {
+    double duration = 0.0;
+    double damping = 0.0;
+    std::optional<double> load_time;
+  };
+
+  CentralDifferenceIntegrator(const IntegratorCommon& common, const Settings& s)
+      : duration_(s.duration),
+        factor_(common.time_step_factor),
+        damping_(s.damping),
+        load_time_(s.load_time.value_or(duration_)),
+        curve_(load_curve_from(common)) {}
+
   // The stable step was lowered (the body stiffened): the rest of the duration in steps of the new size, and
   // this step's coefficients for the change of size (central differences with h_(n-1) != h_n: velocities at
   // the half steps, the acceleration over the mean step h_bar):

@@ -44,20 +44,42 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
         "Adaptive dynamic relaxation: loads are applied over `load_steps` steps, then the iteration continues "
         "until the estimated distance to the steady state is below `tolerance`.");
     declare_time_step_factor(d);
-    d.integer("load_steps").unit("1").at_least(1).defaults(2000).doc(
-        "steps over which the loads grow from 0 to full; more steps follow a path-dependent load (the needle) "
-        "more quasi-statically");
+    d.integer("load_steps")
+        .unit("1")
+        .at_least(1)
+        .defaults(2000)
+        .doc(
+            "steps over which the loads grow from 0 to full; more steps follow a path-dependent load (the needle) "
+            "more quasi-statically")
+        .to<&Settings::load_steps>();
     declare_load_curve(d);
-    d.number("tolerance").unit("1").positive().less_than(1.0).defaults(1e-6).doc(
-        "stop when the estimated distance to the steady state (max over nodes) is below this fraction of the "
-        "largest displacement");
-    d.integer("converged_steps").unit("1").at_least(1).defaults(20).doc(
-        "consecutive steps the error estimate must stay under the tolerance");
-    d.integer("max_steps").unit("1").at_least(1).defaults(2000000).doc(
-        "give up (status unstable, what \"not_converged\") after this many steps");
-    d.boolean("mass_scaling").defaults(true).doc(
-        "scale the density per integration point so every point has the same critical time step (changes the "
-        "path to the steady state, not the steady state)");
+    d.number("tolerance")
+        .unit("1")
+        .positive()
+        .less_than(1.0)
+        .defaults(1e-6)
+        .doc(
+            "stop when the estimated distance to the steady state (max over nodes) is below this fraction of the "
+            "largest displacement")
+        .to<&Settings::tolerance>();
+    d.integer("converged_steps")
+        .unit("1")
+        .at_least(1)
+        .defaults(20)
+        .doc("consecutive steps the error estimate must stay under the tolerance")
+        .to<&Settings::converged_steps>();
+    d.integer("max_steps")
+        .unit("1")
+        .at_least(1)
+        .defaults(2000000)
+        .doc("give up (status unstable, what \"not_converged\") after this many steps")
+        .to<&Settings::max_steps>();
+    d.boolean("mass_scaling")
+        .defaults(true)
+        .doc(
+            "scale the density per integration point so every point has the same critical time step (changes the "
+            "path to the steady state, not the steady state)")
+        .to<&Settings::mass_scaling>();
     d.boolean("held_mass_scaling")
         .defaults(true)
         .doc(
@@ -65,53 +87,26 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
             "integration point's largest tangent modulus dP/dF against its value at rest), so that the tissue a load "
             "stiffened (the sleeve the needle shears) no longer holds the whole body's stable step down while it "
             "relaxes; with the stable-step monitor's \"follow\" the step then rises to what the rest of the body "
-            "allows. Changes the path to the steady state, not the steady state");
-    d.integer("relaxed_increments").unit("1").at_least(1).defaults(1).doc(
-        "relax to the steady state at this many equally spaced loads (1/N, 2/N, ... of the full load, each reached "
-        "along the load curve, held while the body relaxes), so that needle.csv and reactions.csv hold the forces "
-        "in equilibrium at each; 1 relaxes only at full load. Where the answer depends on the loading path (the "
-        "kinematic needle captures tissue as it advances), ramp slowly enough (load_steps) that each row equals a run "
-        "relaxed at that load: on the default scene 8000 (docs/validation.md)");
-    d.number("held_damping_factor")
+            "allows. Changes the path to the steady state, not the steady state")
+        .to<&Settings::held_mass_scaling>();
+    d.integer("relaxed_increments")
         .unit("1")
-        .positive()
-        .at_most(1.0)
-        .defaults(0.8)
+        .at_least(1)
+        .defaults(1)
         .doc(
-            "while a load is held, tune the damping to this fraction of the estimated lowest frequency: the estimate "
-            "lies at or above the lowest frequency (it is a Rayleigh quotient, and the body softens as it settles), "
-            "and damping tuned above the lowest frequency slows its mode far more than damping tuned as far below it; "
-            "1 tunes it to the estimate itself. The ramp always uses the estimate, so the loading path does not depend "
-            "on this");
-    d.number("held_stiffness_damping")
-        .unit("1")
-        .at_least(0.0)
-        .at_most(0.1)
-        .defaults(0.05)
-        .doc(
-            "while a load is held, add stiffness-proportional damping b K v with b = this times the time step (from "
-            "the last two force evaluations): a mode at h w gets the damping ratio this x h w / 2, so the highest "
-            "modes are damped and the slowest is nearly untouched; it holds down modes that the consistent-integration "
-            "correction's nonsymmetric forces make grow. It lowers the largest stable step by 1 / sqrt(1 + 2 x this) "
-            "(5% at 0.05, inside the step's 0.9 margin); 0 turns it off. The ramp never uses it");
-    d.integer("damping_update_steps").unit("1").at_least(1).defaults(10).doc(
-        "re-estimate the lowest eigenfrequency (and so the damping) every this many steps");
+            "relax to the steady state at this many equally spaced loads (1/N, 2/N, ... of the full load, each reached "
+            "along the load curve, held while the body relaxes), so that needle.csv and reactions.csv hold the forces "
+            "in equilibrium at each; 1 relaxes only at full load. Where the answer depends on the loading path (the "
+            "kinematic needle captures tissue as it advances), ramp slowly enough (load_steps) that each row equals a "
+            "run "
+            "relaxed at that load: on the default scene 8000 (docs/validation.md)")
+        .to<&Settings::relaxed_increments>();
+    declare_held_damping(d);
     d.example({{"load_steps", 200}, {"tolerance", 1e-5}});
   }
 
   explicit DynamicRelaxationIntegrator(const Parameters& p)
-      : factor_(p.number("time_step_factor")),
-        load_steps_(p.integer("load_steps")),
-        curve_(load_curve_from(p)),
-        tolerance_(p.number("tolerance")),
-        converged_steps_(p.integer("converged_steps")),
-        max_steps_(p.integer("max_steps")),
-        mass_scaling_(p.boolean("mass_scaling")),
-        held_mass_scaling_(p.boolean("held_mass_scaling")),
-        increments_(p.integer("relaxed_increments")),
-        update_every_(p.integer("damping_update_steps")),
-        held_damping_factor_(p.number("held_damping_factor")),
-        held_stiffness_damping_(p.number("held_stiffness_damping")) {}
+      : DynamicRelaxationIntegrator(p.read<IntegratorCommon>(), p.read<Settings>()) {}
 
   void initialise(DiscreteSystem& system) override {
     unscaled_stable_ = system.stable_time_step();
@@ -207,6 +202,67 @@ class DynamicRelaxationIntegrator final : public TimeIntegrator {
   }
 
  private:
+  struct Settings {
+    long load_steps = 0;
+    double tolerance = 0.0;
+    long converged_steps = 0;
+    long max_steps = 0;
+    bool mass_scaling = false;
+    bool held_mass_scaling = false;
+    long relaxed_increments = 0;
+    double held_damping_factor = 0.0;
+    double held_stiffness_damping = 0.0;
+    long damping_update_steps = 0;
+  };
+
+  // The damping while a load is held, and how often it is re-estimated.
+  static void declare_held_damping(ComponentDeclaration& d) {
+    d.number("held_damping_factor")
+        .unit("1")
+        .positive()
+        .at_most(1.0)
+        .defaults(0.8)
+        .doc(
+            "while a load is held, tune the damping to this fraction of the estimated lowest frequency: the estimate "
+            "lies at or above the lowest frequency (it is a Rayleigh quotient, and the body softens as it settles), "
+            "and damping tuned above the lowest frequency slows its mode far more than damping tuned as far below it; "
+            "1 tunes it to the estimate itself. The ramp always uses the estimate, so the loading path does not depend "
+            "on this")
+        .to<&Settings::held_damping_factor>();
+    d.number("held_stiffness_damping")
+        .unit("1")
+        .at_least(0.0)
+        .at_most(0.1)
+        .defaults(0.05)
+        .doc(
+            "while a load is held, add stiffness-proportional damping b K v with b = this times the time step (from "
+            "the last two force evaluations): a mode at h w gets the damping ratio this x h w / 2, so the highest "
+            "modes are damped and the slowest is nearly untouched; it holds down modes that the consistent-integration "
+            "correction's nonsymmetric forces make grow. It lowers the largest stable step by 1 / sqrt(1 + 2 x this) "
+            "(5% at 0.05, inside the step's 0.9 margin); 0 turns it off. The ramp never uses it")
+        .to<&Settings::held_stiffness_damping>();
+    d.integer("damping_update_steps")
+        .unit("1")
+        .at_least(1)
+        .defaults(10)
+        .doc("re-estimate the lowest eigenfrequency (and so the damping) every this many steps")
+        .to<&Settings::damping_update_steps>();
+  }
+
+  DynamicRelaxationIntegrator(const IntegratorCommon& common, const Settings& s)
+      : factor_(common.time_step_factor),
+        load_steps_(s.load_steps),
+        curve_(load_curve_from(common)),
+        tolerance_(s.tolerance),
+        converged_steps_(s.converged_steps),
+        max_steps_(s.max_steps),
+        mass_scaling_(s.mass_scaling),
+        held_mass_scaling_(s.held_mass_scaling),
+        increments_(s.relaxed_increments),
+        update_every_(s.damping_update_steps),
+        held_damping_factor_(s.held_damping_factor),
+        held_stiffness_damping_(s.held_stiffness_damping) {}
+
   // The ramp step at which increment k (0-based) begins; increment_end() is where the current one ends.
   long increment_start(long k) const {
     return static_cast<long>(std::llround(static_cast<double>(load_steps_) * static_cast<double>(k) /

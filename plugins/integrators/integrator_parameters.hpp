@@ -15,6 +15,13 @@ namespace mtled {
 
 enum class LoadCurve { linear, smooth };
 
+// The parameters every integrator here declares with the two functions below, read with
+// Parameters::read<IntegratorCommon>().
+struct IntegratorCommon {
+  double time_step_factor = 0.0;
+  std::string load_curve;
+};
+
 // Declares "time_step_factor", the same for every explicit integrator.
 inline void declare_time_step_factor(ComponentDeclaration& d) {
   d.number("time_step_factor")
@@ -23,19 +30,25 @@ inline void declare_time_step_factor(ComponentDeclaration& d) {
       .defaults(0.9)
       .doc(
           "multiplier on the estimated stable time step; above 1 risks instability, which the stability monitors "
-          "then report");
+          "then report")
+      .to<&IntegratorCommon::time_step_factor>();
 }
 
 // Declares "load_curve", the one declaration every integrator that ramps its loads shares; read it back with
-// load_curve_from(parameters).
+// load_curve_from(common).
 inline void declare_load_curve(ComponentDeclaration& d) {
-  d.string("load_curve").defaults("smooth").choices({"smooth", "linear"}).doc(
-      "shape of the load ramp: smooth (10x^3 - 15x^4 + 6x^5: no velocity or acceleration jump at either end, so the "
-      "ramp excites no high modes) or linear (constant rate)");
+  d.string("load_curve")
+      .defaults("smooth")
+      .choices({"smooth", "linear"})
+      .doc(
+          "shape of the load ramp: smooth (10x^3 - 15x^4 + 6x^5: no velocity or acceleration jump at either end, so "
+          "the "
+          "ramp excites no high modes) or linear (constant rate)")
+      .to<&IntegratorCommon::load_curve>();
 }
 
-inline LoadCurve load_curve_from(const Parameters& p) {
-  return p.string("load_curve") == "linear" ? LoadCurve::linear : LoadCurve::smooth;
+inline LoadCurve load_curve_from(const IntegratorCommon& common) {
+  return common.load_curve == "linear" ? LoadCurve::linear : LoadCurve::smooth;
 }
 
 inline double load_fraction(LoadCurve curve, double x) {

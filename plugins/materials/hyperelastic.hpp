@@ -12,7 +12,13 @@ inline double p_wave_modulus(double shear_modulus, const VolumetricPenalty& pena
   return penalty.two_over_D + 4.0 * shear_modulus / 3.0;
 }
 
-// The parameters every law here declares: "mu" (Pa), "D" (1/Pa) and "density" (kg/m^3).
+// The parameters every law here declares, "mu" (Pa), "D" (1/Pa) and "density" (kg/m^3), read with
+// Parameters::read<Moduli>().
+struct Moduli {
+  double mu = 0.0;
+  double D = 0.0;
+  double density = 0.0;
+};
 void declare_shear_modulus(ComponentDeclaration& declaration);
 void declare_compressibility(ComponentDeclaration& declaration);
 void declare_density(ComponentDeclaration& declaration);

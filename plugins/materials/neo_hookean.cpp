@@ -22,10 +22,10 @@ class NeoHookeanMaterial final : public Material {
   }
 
   explicit NeoHookeanMaterial(const Parameters& p)
-      : mu_(p.number("mu")), D_(p.number("D")), law_(mu_, D_), density_(p.number("density")) {}
+      : moduli_(p.read<hyperelastic::Moduli>()), law_(moduli_.mu, moduli_.D) {}
 
-  double density() const override { return density_; }
-  double p_wave_modulus() const override { return hyperelastic::p_wave_modulus(mu_, law_.volumetric); }
+  double density() const override { return moduli_.density; }
+  double p_wave_modulus() const override { return hyperelastic::p_wave_modulus(moduli_.mu, law_.volumetric); }
   bool stress(const Mat3& F, Mat3& S) const noexcept override { return scalar::one_point_stress(law_, F, S); }
   void stress_batch(StressBatch& batch) const noexcept override { neo_hookean_stress_batch(law_, batch); }
   double energy(const Mat3& F) const noexcept override { return scalar::one_point_energy(law_, F); }
@@ -35,10 +35,8 @@ class NeoHookeanMaterial final : public Material {
 #endif
 
  private:
-  double mu_;
-  double D_;
+  hyperelastic::Moduli moduli_;
   NeoHookeanLaw law_;
-  double density_;
 };
 
 }  // namespace mtled

@@ -17,9 +17,11 @@ class OgdenMaterial final : public Material {
     d.number("alpha")
         .unit("1")
         .nonzero()
-        .doc("Ogden exponent on the principal stretches; it sets how the material stiffens: 2 is "
-             "neo-Hookean, negative values stiffen more in compression; Sylgard 527 gel and brain tissue "
-             "fits: about -1.3 to -4.7");
+        .doc(
+            "Ogden exponent on the principal stretches; it sets how the material stiffens: 2 is "
+            "neo-Hookean, negative values stiffen more in compression; Sylgard 527 gel and brain tissue "
+            "fits: about -1.3 to -4.7")
+        .to<&Exponent::alpha>();
     hyperelastic::declare_compressibility(d);
     hyperelastic::declare_density(d);
     // Sylgard 527 gel, the paper's section 2.2.2 and Table 1 (Material 2): nu = 0.49.
@@ -27,14 +29,10 @@ class OgdenMaterial final : public Material {
   }
 
   explicit OgdenMaterial(const Parameters& p)
-      : mu_(p.number("mu")),
-        alpha_(p.number("alpha")),
-        D_(p.number("D")),
-        law_(mu_, alpha_, D_),
-        density_(p.number("density")) {}
+      : moduli_(p.read<hyperelastic::Moduli>()), law_(moduli_.mu, p.read<Exponent>().alpha, moduli_.D) {}
 
-  double density() const override { return density_; }
-  double p_wave_modulus() const override { return hyperelastic::p_wave_modulus(mu_, law_.volumetric); }
+  double density() const override { return moduli_.density; }
+  double p_wave_modulus() const override { return hyperelastic::p_wave_modulus(moduli_.mu, law_.volumetric); }
   bool stress(const Mat3& F, Mat3& S) const noexcept override { return scalar::one_point_stress(law_, F, S); }
   void stress_batch(StressBatch& batch) const noexcept override { ogden_stress_batch(law_, batch); }
   double energy(const Mat3& F) const noexcept override { return scalar::one_point_energy(law_, F); }
@@ -44,11 +42,11 @@ class OgdenMaterial final : public Material {
 #endif
 
  private:
-  double mu_;
-  double alpha_;
-  double D_;
+  struct Exponent {
+    double alpha = 0.0;
+  };
+  hyperelastic::Moduli moduli_;
   OgdenLaw law_;
-  double density_;
 };
 
 }  // namespace mtled

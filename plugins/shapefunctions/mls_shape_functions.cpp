@@ -20,14 +20,16 @@ class MlsShapeFunctions final : public ShapeFunctions {
     d.string("basis")
         .defaults("linear")
         .choices({"linear", "quadratic"})
-        .doc("polynomial basis: linear (1, x, y, z) reproduces linear fields exactly and needs 4 non-coplanar nodes "
-             "per support; quadratic (10 terms) reproduces quadratic fields and needs at least 10 nodes that do "
-             "not lie on one quadric surface, which fails near boundaries of coarse meshes");
+        .doc(
+            "polynomial basis: linear (1, x, y, z) reproduces linear fields exactly and needs 4 non-coplanar nodes "
+            "per support; quadratic (10 terms) reproduces quadratic fields and needs at least 10 nodes that do "
+            "not lie on one quadric surface, which fails near boundaries of coarse meshes")
+        .to<&Basis::basis>();
     d.example({{"support_dilatation", 1.6}, {"basis", "linear"}});
   }
 
-  explicit MlsShapeFunctions(const Parameters& p) : dilatation_(p.number("support_dilatation")) {
-    const std::string basis = p.string("basis");
+  explicit MlsShapeFunctions(const Parameters& p) : dilatation_(p.read<shapefunctions::Support>().dilatation) {
+    const std::string basis = p.read<Basis>().basis;
     if (basis == "linear") {
       settings_.basis = shapefunctions::PolynomialBasis::linear;
     } else if (basis == "quadratic") {
@@ -54,6 +56,9 @@ class MlsShapeFunctions final : public ShapeFunctions {
   }
 
  private:
+  struct Basis {
+    std::string basis;
+  };
   double dilatation_;
   shapefunctions::MovingLeastSquaresSettings settings_;
 };

@@ -23,18 +23,20 @@ class MmlsShapeFunctions final : public ShapeFunctions {
         .unit("1")
         .between(1e-3, 1.0)
         .defaults(kDefaultPenalty)
-        .doc("m: m^2 times the sum of the node weights is added to the quadratic diagonal of the moment matrix, "
-             "in coordinates scaled by the mean support radius (so m does not depend on units, mesh size or "
-             "support size). Where the nodes determine a quadratic fit, it is changed by O(m^2); where they "
-             "do not, the quadratic terms vanish and the fit is linear MLS. Below 1e-3 the regularisation is "
-             "too weak to keep sparse supports well conditioned in double precision; near 1 the fit is close to "
-             "linear MLS everywhere");
+        .doc(
+            "m: m^2 times the sum of the node weights is added to the quadratic diagonal of the moment matrix, "
+            "in coordinates scaled by the mean support radius (so m does not depend on units, mesh size or "
+            "support size). Where the nodes determine a quadratic fit, it is changed by O(m^2); where they "
+            "do not, the quadratic terms vanish and the fit is linear MLS. Below 1e-3 the regularisation is "
+            "too weak to keep sparse supports well conditioned in double precision; near 1 the fit is close to "
+            "linear MLS everywhere")
+        .to<&Penalty::penalty>();
     d.example({{"support_dilatation", kDefaultDilatation}, {"penalty", kDefaultPenalty}});
   }
 
-  explicit MmlsShapeFunctions(const Parameters& p) : dilatation_(p.number("support_dilatation")) {
+  explicit MmlsShapeFunctions(const Parameters& p) : dilatation_(p.read<shapefunctions::Support>().dilatation) {
     settings_.basis = shapefunctions::PolynomialBasis::quadratic;
-    settings_.quadratic_penalty = p.number("penalty");
+    settings_.quadratic_penalty = p.read<Penalty>().penalty;
   }
 
   double support_dilatation() const override { return dilatation_; }
@@ -52,6 +54,9 @@ class MmlsShapeFunctions final : public ShapeFunctions {
   }
 
  private:
+  struct Penalty {
+    double penalty = 0.0;
+  };
   static constexpr double kDefaultDilatation = 1.8;
   static constexpr double kDefaultPenalty = 1e-2;
   double dilatation_;

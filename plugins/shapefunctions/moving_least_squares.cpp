@@ -322,10 +322,12 @@ void declare_support_dilatation(ComponentDeclaration& declaration, double defaul
       .unit("1")
       .between(1.0, 5.0)
       .defaults(default_value)
-      .doc("d_c: each node's support radius is d_c times the mean length of the mesh edges at the node, and an "
-           "integration point uses every node whose support covers it. Larger values give more nodes per "
-           "support (smoother, better conditioned, slower). " +
-           advice);
+      .doc(
+          "d_c: each node's support radius is d_c times the mean length of the mesh edges at the node, and an "
+          "integration point uses every node whose support covers it. Larger values give more nodes per "
+          "support (smoother, better conditioned, slower). " +
+          advice)
+      .to<&Support::dilatation>();
 }
 
 }  // namespace mtled::shapefunctions

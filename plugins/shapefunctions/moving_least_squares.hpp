@@ -48,7 +48,10 @@ ShapeFunctionFit interpolate_moving_least_squares(const MovingLeastSquaresSettin
 // keeps the shape functions accurate to about 1e-6 relative (1e6 x 2.2e-16).
 constexpr double kMinimumReciprocalCondition = 2.2e-10;
 
-// `support_dilatation`, declared the same way by every shape function of this folder.
+// `support_dilatation`, declared the same way by every shape function of this folder, read into Support.
+struct Support {
+  double dilatation = 0.0;
+};
 void declare_support_dilatation(ComponentDeclaration& declaration, double default_value, const std::string& advice);
 
 }  // namespace mtled::shapefunctions

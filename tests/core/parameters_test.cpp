@@ -39,6 +39,47 @@ TEST(Parameters, DefaultsFillInAndOptionalStaysAbsent) {
   EXPECT_EQ(p.pointer("mu"), "/materials/0/mu");
 }
 
+// A component binds each parameter to the member it fills, so its name is written once (ParameterBuilder::to):
+// read<Settings>() fills every member bound to Settings, given or defaulted, an absent optional as nullopt, and
+// leaves a member bound to nothing, or bound in another struct, at its initialiser.
+struct BoundSettings {
+  double mu = -1.0;
+  int points = -1;
+  std::string basis;
+  Vec3 direction = Vec3::Zero();
+  std::optional<double> capture = 99.0;
+  double unbound = 7.0;
+};
+struct OtherSettings {
+  long count = 3;
+};
+
+TEST(Parameters, BoundMembersAreFilledByRead) {
+  ComponentDeclaration d("bound", Category::material);
+  d.number("mu").unit("Pa").positive().doc("shear modulus").to<&BoundSettings::mu>();
+  d.integer("points").unit("1").defaults(4).doc("points per tet").to<&BoundSettings::points>();
+  d.string("basis").defaults("linear").doc("basis").to<&BoundSettings::basis>();
+  d.vector3("direction").unit("1").defaults(json::array({0, 0, -1})).doc("direction").to<&BoundSettings::direction>();
+  d.number("capture").unit("m").positive().optional().doc("optional length").to<&BoundSettings::capture>();
+  d.integer("count").unit("1").defaults(8).doc("in another struct").to<&OtherSettings::count>();
+  std::vector<Problem> problems;
+  const Parameters absent = validate_parameters(d, {{"type", "bound"}, {"mu", 722}}, "/materials/0", problems);
+  const Parameters given = validate_parameters(d, {{"type", "bound"}, {"mu", 5}, {"capture", 0.002}, {"count", 2}},
+                                               "/materials/1", problems);
+  ASSERT_TRUE(problems.empty()) << messages(problems);
+  const auto settings = absent.read<BoundSettings>();
+  EXPECT_EQ(settings.mu, 722.0);
+  EXPECT_EQ(settings.points, 4);
+  EXPECT_EQ(settings.basis, "linear");
+  EXPECT_EQ(settings.direction, Vec3(0, 0, -1));
+  EXPECT_FALSE(settings.capture.has_value());
+  EXPECT_EQ(settings.unbound, 7.0);
+  EXPECT_EQ(absent.read<OtherSettings>().count, 8);
+  EXPECT_EQ(given.read<BoundSettings>().capture, std::optional<double>(0.002));
+  EXPECT_EQ(given.read<BoundSettings>().mu, 5.0);
+  EXPECT_EQ(given.read<OtherSettings>().count, 2);
+}
+
 TEST(Parameters, EveryProblemIsReportedInOnePass) {
   std::vector<Problem> problems;
   const json block = {{"type", "sample"},      {"mu", -5},          {"alpha", 0},          {"coefficient", 1.5},

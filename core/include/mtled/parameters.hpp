@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <type_traits>
+#include <typeinfo>
 #include <vector>
 
 #include "mtled/errors.hpp"
@@ -109,6 +111,17 @@ struct ValueSyntax {
   json schema;
 };
 
+class Parameters;
+
+// A parameter bound to a member of a component's settings struct (ParameterBuilder::to): Parameters::read<Settings>
+// fills every member bound to Settings, so that a component writes each parameter's name once, where it declares
+// it (as FEBio's ADD_PARAMETER binds the member it fills). Plain pointers into the plugin's code: nothing of it runs
+// or is destroyed after the plugin is unloaded.
+struct ParameterBinding {
+  const std::type_info* settings = nullptr;
+  void (*assign)(void* settings, const Parameters& values, std::string_view name) = nullptr;
+};
+
 struct ParameterSpec {
   std::string name;
   ParameterType type = ParameterType::number;
@@ -119,6 +132,7 @@ struct ParameterSpec {
   std::vector<json> choices;  // allowed values (strings, string-list entries, integers)
   std::string doc;
   ValueSyntax syntax;  // a node_set's: NodeSelector::syntax()
+  ParameterBinding binding;
 
   json to_json() const;         // for `mtled plugins --json`
   json to_json_schema() const;  // for `mtled schema`
@@ -140,6 +154,12 @@ class ParameterBuilder {
   ParameterBuilder& less_than(double value);
   ParameterBuilder& between(double low, double high);  // inclusive
   ParameterBuilder& choices(std::vector<json> allowed);
+  // Binds the parameter to `member` of a settings struct, which Parameters::read fills: a number to double, an
+  // integer to long or int, a boolean to bool, a string to std::string, a vector3 to Vec3, a number_list to
+  // std::vector<double>, a number_map to std::map<std::string, double>, a string_list to std::vector<std::string>,
+  // a file to std::filesystem::path; an optional() one to std::optional of these.
+  template <auto member>
+  ParameterBuilder& to();
 
  private:
   ParameterSpec& spec_;
@@ -213,13 +233,83 @@ class Parameters {
   std::optional<Vec3> optional_vector3(std::string_view name) const;
   std::optional<std::filesystem::path> optional_file(std::string_view name) const;
 
+  // The settings struct whose members the declaration bound (ParameterBuilder::to), filled; members bound to no
+  // parameter keep their default initialisers.
+  template <class Settings>
+  Settings read() const;
+  // One value by name, as the type of the member it is bound to (ParameterBuilder::to).
+  template <class Value>
+  Value get(std::string_view name) const;
+
  private:
   const json& value(std::string_view name, ParameterType expected) const;
   std::string component_;
   std::string pointer_;
   json values_ = json::object();
   std::vector<std::pair<std::string, ParameterType>> types_;
+  std::vector<std::pair<std::string, ParameterBinding>> bindings_;
 };
+
+namespace detail {
+template <class T>
+struct is_optional : std::false_type {};
+template <class T>
+struct is_optional<std::optional<T>> : std::true_type {};
+template <class T>
+struct member_of;
+template <class Settings, class Value>
+struct member_of<Value Settings::*> {
+  using settings = Settings;
+  using value = Value;
+};
+}  // namespace detail
+
+template <class Value>
+Value Parameters::get(std::string_view name) const {
+  if constexpr (detail::is_optional<Value>::value) {
+    if (!has(name)) return std::nullopt;
+    return get<typename Value::value_type>(name);
+  } else if constexpr (std::is_same_v<Value, double>) {
+    return number(name);
+  } else if constexpr (std::is_same_v<Value, long>) {
+    return integer(name);
+  } else if constexpr (std::is_same_v<Value, int>) {
+    return static_cast<int>(integer(name));
+  } else if constexpr (std::is_same_v<Value, bool>) {
+    return boolean(name);
+  } else if constexpr (std::is_same_v<Value, std::string>) {
+    return string(name);
+  } else if constexpr (std::is_same_v<Value, Vec3>) {
+    return vector3(name);
+  } else if constexpr (std::is_same_v<Value, std::vector<double>>) {
+    return number_list(name);
+  } else if constexpr (std::is_same_v<Value, std::map<std::string, double>>) {
+    return number_map(name);
+  } else if constexpr (std::is_same_v<Value, std::vector<std::string>>) {
+    return string_list(name);
+  } else {
+    static_assert(std::is_same_v<Value, std::filesystem::path>, "no parameter type reads into this member's type");
+    return file(name);
+  }
+}
+
+template <class Settings>
+Settings Parameters::read() const {
+  Settings settings{};
+  for (const auto& [name, binding] : bindings_)
+    if (binding.settings != nullptr && *binding.settings == typeid(Settings)) binding.assign(&settings, *this, name);
+  return settings;
+}
+
+template <auto member>
+ParameterBuilder& ParameterBuilder::to() {
+  using Member = detail::member_of<decltype(member)>;
+  spec_.binding.settings = &typeid(typename Member::settings);
+  spec_.binding.assign = [](void* settings, const Parameters& values, std::string_view name) {
+    static_cast<typename Member::settings*>(settings)->*member = values.get<typename Member::value>(name);
+  };
+  return *this;
+}
 
 // Checks one component block against its declaration and appends every problem found (wrong types,
 // out-of-range values, missing required keys, unknown keys with the closest valid names). Keys listed in

@@ -17,8 +17,11 @@ namespace mtled {
 template <class Interface>
 using Factory = std::function<std::unique_ptr<Interface>(const Parameters&)>;
 
-// Parameters the kernel adds to every component of a category (a material's "region").
+// Parameters the kernel adds to every component of a category (a material's "region", read into MaterialRegion).
 std::vector<ParameterSpec> common_parameters(Category category);
+struct MaterialRegion {
+  std::optional<std::string> region;
+};
 
 class Registry {
  public:

@@ -66,8 +66,13 @@ struct Scene {
   const Parameters& section(const std::string& key) const;
 };
 
-// The kernel's own section of a scene, declared like components.
+// The kernel's own section of a scene, declared like components, and its values (Parameters::read).
 const ComponentDeclaration& discretisation_declaration();
+struct DiscretisationSettings {
+  int integration_points_per_tet = 1;
+  bool consistent_integration = true;
+  std::string precision;
+};
 
 // Validates the whole scene, loading only the plugins it names, with the sections given (a scene's other
 // top-level keys are problems). Throws InputError listing every problem, each located with SceneDocument::locate.

@@ -122,14 +122,18 @@ class CudaBackend final : public StepEngine {
         "An NVIDIA GPU: the force kernel, the update, the constraint projection's products and the step's sums run "
         "on the device, where the state stays; built when CMake finds the CUDA toolkit. Runs any law whose plugin "
         "holds its device code (the shipped Ogden and neo-Hookean do), no volumetric treatment yet (docs/gpu.md).");
-    d.integer("device").unit("1").non_negative().defaults(0).doc(
-        "which GPU (CUDA's device number, as nvidia-smi lists them)");
+    d.integer("device")
+        .unit("1")
+        .non_negative()
+        .defaults(0)
+        .doc("which GPU (CUDA's device number, as nvidia-smi lists them)")
+        .to<&Settings::device>();
     d.example({{"device", 0}});
   }
 
   // Finds the device at once, before the scene's mesh and model are built: a run that cannot use it stops in a
   // second, not after the setup.
-  explicit CudaBackend(const Parameters& p) : pointer_(p.pointer()), device_(static_cast<int>(p.integer("device"))) {
+  explicit CudaBackend(const Parameters& p) : pointer_(p.pointer()), device_(p.read<Settings>().device) {
     select_device();
   }
 
@@ -322,6 +326,9 @@ class CudaBackend final : public StepEngine {
   }
 
  private:
+  struct Settings {
+    int device = 0;
+  };
   [[noreturn]] void refuse(const std::string& message) const { throw InputError(pointer_, message); }
 
   void select_device() {

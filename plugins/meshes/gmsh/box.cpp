@@ -15,14 +15,21 @@ class GmshBox final : public MeshSource {
     d.summary(
         "Rectangular box [origin, origin + size] tet-meshed by Gmsh; node sets x0, x1, y0, y1, z0, z1 "
         "(the faces at the low and high end of each axis), region \"all\"");
-    d.vector3("size").at_least(kMinLength).unit("m").doc("edge lengths [a, b, c] along x, y, z, each >= 1e-5 m");
-    d.vector3("origin").defaults({0.0, 0.0, 0.0}).unit("m").doc("corner with the smallest coordinates");
+    d.vector3("size")
+        .at_least(kMinLength)
+        .unit("m")
+        .doc("edge lengths [a, b, c] along x, y, z, each >= 1e-5 m")
+        .to<&Settings::size>();
+    d.vector3("origin")
+        .defaults({0.0, 0.0, 0.0})
+        .unit("m")
+        .doc("corner with the smallest coordinates")
+        .to<&Settings::origin>();
     declare_mesh_size(d, 5000);
     d.example({{"size", {0.03, 0.02, 0.01}}, {"target_nodes", 1500}});
   }
 
-  explicit GmshBox(const Parameters& p)
-      : parameters_(p), size_(positive_extent(p, "size")), origin_(p.vector3("origin")) {}
+  explicit GmshBox(const Parameters& p) : GmshBox(p, p.read<Settings>()) {}
 
   TetMesh load(const MeshContext&) override {
     GeneratorRequest request;
@@ -33,6 +40,12 @@ class GmshBox final : public MeshSource {
   }
 
  private:
+  struct Settings {
+    Vec3 size = Vec3::Zero(), origin = Vec3::Zero();
+  };
+  GmshBox(const Parameters& p, const Settings& s)
+      : parameters_(p), size_(positive_extent(s.size, p, "size")), origin_(s.origin) {}
+
   GeometryMeasure build() const {
     gmsh_checked([&] {
       const int box = gmsh::model::occ::addBox(origin_[0], origin_[1], origin_[2], size_[0], size_[1], size_[2]);

@@ -73,8 +73,9 @@ class GmshBrainPhantom final : public MeshSource {
         .doc(
             "bounding box: left-right (x), back-front (y), inferior-superior (z) extent, each >= 1e-5 m; the paper's "
             "phantom is 0.14 x 0.156 x 0.14 m. Each axis scales the design; the scale factors of two axes may "
-            "differ by a factor of 2 at most");
-    d.vector3("center").defaults({0.0, 0.0, 0.0}).unit("m").doc("centre of the bounding box");
+            "differ by a factor of 2 at most")
+        .to<&Settings::size>();
+    d.vector3("center").defaults({0.0, 0.0, 0.0}).unit("m").doc("centre of the bounding box").to<&Settings::center>();
     d.number("inferior_fraction")
         .defaults(0.3)
         .greater_than(0.0)
@@ -82,27 +83,13 @@ class GmshBrainPhantom final : public MeshSource {
         .unit("1")
         .doc(
             "node set \"inferior\" holds the surface nodes in the lowest inferior_fraction of the height (z): the "
-            "part of the surface a skull base supports, fixed in the paper");
+            "part of the surface a skull base supports, fixed in the paper")
+        .to<&Settings::inferior_fraction>();
     declare_mesh_size(d, 74000);
     d.example({{"target_nodes", 2000}});
   }
 
-  explicit GmshBrainPhantom(const Parameters& p)
-      : parameters_(p),
-        scale_(positive_extent(p, "size").cwiseQuotient(kDesignSize)),
-        center_(p.vector3("center")),
-        inferior_fraction_(p.number("inferior_fraction")) {
-    // Squashed far enough, the ellipsoids' B-spline faces send Gmsh's surface mesher into minutes of
-    // retries (at a tenth of the height); within a factor 2 it meshes as fast as the default shape.
-    const double distortion = scale_.maxCoeff() / scale_.minCoeff();
-    if (distortion > kMaxDistortion)
-      throw InputError(p.pointer("size"),
-                       fmt::format("size {} m stretches the brain's proportions (0.14 : 0.156 : 0.14) by a factor of "
-                                   "{:.3g} between axes; at most {:.0f} is allowed: scale all three extents alike, "
-                                   "e.g. {} m",
-                                   format_vector(kDesignSize.cwiseProduct(scale_)), distortion, kMaxDistortion,
-                                   format_vector(kDesignSize * std::cbrt(scale_.prod()))));
-  }
+  explicit GmshBrainPhantom(const Parameters& p) : GmshBrainPhantom(p, p.read<Settings>()) {}
 
   TetMesh load(const MeshContext&) override {
     GeneratorRequest request;
@@ -129,6 +116,28 @@ class GmshBrainPhantom final : public MeshSource {
   }
 
  private:
+  struct Settings {
+    Vec3 size = Vec3::Zero(), center = Vec3::Zero();
+    double inferior_fraction = 0.0;
+  };
+
+  GmshBrainPhantom(const Parameters& p, const Settings& s)
+      : parameters_(p),
+        scale_(positive_extent(s.size, p, "size").cwiseQuotient(kDesignSize)),
+        center_(s.center),
+        inferior_fraction_(s.inferior_fraction) {
+    // Squashed far enough, the ellipsoids' B-spline faces send Gmsh's surface mesher into minutes of
+    // retries (at a tenth of the height); within a factor 2 it meshes as fast as the default shape.
+    const double distortion = scale_.maxCoeff() / scale_.minCoeff();
+    if (distortion > kMaxDistortion)
+      throw InputError(p.pointer("size"),
+                       fmt::format("size {} m stretches the brain's proportions (0.14 : 0.156 : 0.14) by a factor of "
+                                   "{:.3g} between axes; at most {:.0f} is allowed: scale all three extents alike, "
+                                   "e.g. {} m",
+                                   format_vector(kDesignSize.cwiseProduct(scale_)), distortion, kMaxDistortion,
+                                   format_vector(kDesignSize * std::cbrt(scale_.prod()))));
+  }
+
   Vec3 place(const Vec3& design_point) const { return center_ + design_point.cwiseProduct(scale_); }
 
   GeometryMeasure build() const {

@@ -16,16 +16,14 @@ class GmshCylinder final : public MeshSource {
         "region \"all\". The paper's small sample (r = 15 mm, h = 17 mm) used grids of 7,480 / 17,730 / "
         "30,294 nodes");
     declare_cylinder_axis(d);
-    d.number("height").at_least(kMinLength).unit("m").doc("height along +z");
+    d.number("height").at_least(kMinLength).unit("m").doc("height along +z").to<&Settings::height>();
     declare_mesh_size(d, 7480);
     declare_rim_refinement(d);
     d.example({{"radius", 0.015}, {"height", 0.017}, {"target_nodes", 2000}});
   }
 
-  explicit GmshCylinder(const Parameters& p) : parameters_(p) {
-    stack_.radius = p.number("radius");
-    stack_.base_center = p.vector3("base_center");
-    stack_.layer_heights = {p.number("height")};
+  explicit GmshCylinder(const Parameters& p) : parameters_(p), stack_(p.read<CylinderStack>()) {
+    stack_.layer_heights = {p.read<Settings>().height};
     stack_.layer_names = {"all"};
   }
 
@@ -34,6 +32,9 @@ class GmshCylinder final : public MeshSource {
   }
 
  private:
+  struct Settings {
+    double height = 0.0;
+  };
   Parameters parameters_;
   CylinderStack stack_;
 };

@@ -23,26 +23,25 @@ class GmshLayeredCylinder final : public MeshSource {
     d.number_list("layer_heights")
         .at_least(kMinLength)
         .unit("m")
-        .doc("thickness of each layer, bottom to top (at least one)");
+        .doc("thickness of each layer, bottom to top (at least one)")
+        .to<&CylinderStack::layer_heights>();
     d.string_list("layer_names")
         .optional()
         .unit("1")
-        .doc("region name of each layer, bottom to top, one per layer, distinct; default layer1 .. layerN");
+        .doc("region name of each layer, bottom to top, one per layer, distinct; default layer1 .. layerN")
+        .to<&Settings::layer_names>();
     declare_mesh_size(d, 32276);
     declare_rim_refinement(d);
     d.example({{"radius", 0.0325}, {"layer_heights", {0.018, 0.009, 0.007}}, {"target_nodes", 2500}});
   }
 
-  explicit GmshLayeredCylinder(const Parameters& p) : parameters_(p) {
-    stack_.radius = p.number("radius");
-    stack_.base_center = p.vector3("base_center");
-    stack_.layer_heights = p.number_list("layer_heights");
+  explicit GmshLayeredCylinder(const Parameters& p) : parameters_(p), stack_(p.read<CylinderStack>()) {
     const std::size_t layers = stack_.layer_heights.size();
     if (layers == 0)
       throw InputError(p.pointer("layer_heights"),
                        "no layers given: list the thickness of each layer from the bottom, e.g. [0.018, 0.009, 0.007]");
-    if (p.has("layer_names")) {
-      stack_.layer_names = p.string_list("layer_names");
+    if (const auto names = p.read<Settings>().layer_names) {
+      stack_.layer_names = *names;
       check_names(p);
     } else {
       for (std::size_t k = 1; k <= layers; ++k) stack_.layer_names.push_back(fmt::format("layer{}", k));
@@ -71,6 +70,9 @@ class GmshLayeredCylinder final : public MeshSource {
     }
   }
 
+  struct Settings {
+    std::optional<std::vector<std::string>> layer_names;
+  };
   Parameters parameters_;
   CylinderStack stack_;
 };

@@ -61,16 +61,24 @@ class GmshStlSurface final : public MeshSource {
         "The volume inside a closed triangulated surface (ASCII or binary STL): the surface is remeshed "
         "and the inside tet-meshed by Gmsh; node set \"surface\", region \"all\". The surface must be "
         "closed, one piece, consistently oriented and not cross itself");
-    d.string("path").unit("1").doc(
-        "STL file; a relative path is resolved against the scene's folder. Each generation re-classifies the "
-        "surface (about 5 s per 100,000 facets here): decimate large scans first");
-    d.number("scale").defaults(1.0).positive().unit("m").doc(
-        "metres per STL unit: 1 for a file in metres, 0.001 for one in millimetres");
+    d.string("path")
+        .unit("1")
+        .doc(
+            "STL file; a relative path is resolved against the scene's folder. Each generation re-classifies the "
+            "surface (about 5 s per 100,000 facets here): decimate large scans first")
+        .to<&Settings::path>();
+    d.number("scale")
+        .defaults(1.0)
+        .positive()
+        .unit("m")
+        .doc("metres per STL unit: 1 for a file in metres, 0.001 for one in millimetres")
+        .to<&Settings::scale>();
     declare_mesh_size(d, 10000);
     d.example({{"path", "brain_surface.stl"}, {"scale", 0.001}, {"target_nodes", 2000}});
   }
 
-  explicit GmshStlSurface(const Parameters& p) : parameters_(p), path_(p.string("path")), scale_(p.number("scale")) {}
+  explicit GmshStlSurface(const Parameters& p)
+      : parameters_(p), path_(p.read<Settings>().path), scale_(p.read<Settings>().scale) {}
 
   TetMesh load(const MeshContext& context) override {
     const std::filesystem::path file = resolve(context.scene_directory);
@@ -89,6 +97,10 @@ class GmshStlSurface final : public MeshSource {
   }
 
  private:
+  struct Settings {
+    std::string path;
+    double scale = 0.0;
+  };
   // Gmsh's and OpenCASCADE's tolerances are absolute (1e-8 to 1e-7 m): a body this small is most likely a
   // wrong scale.
   void check_extent(const StlSurface& surface) const {

@@ -136,50 +136,83 @@ class LabelMapMesh final : public MeshSource {
               "frame: NRRD (.nrrd, 3D Slicer's .seg.nrrd with its segment names) or NIfTI-1/2 (.nii, .nii.gz). "
               "Each meshed label is a region named after its segment, or \"label_N\"; node set \"surface\" holds "
               "the boundary nodes (docs/label-maps.md)");
-    d.string("path").doc("the label map; a relative path is taken from the scene's folder");
-    d.number_list("labels").unit("1").optional().doc("label values to mesh (default: every label but 0); the others are outside the body");
-    d.string_list("segments").optional().doc("segment names to mesh (a .seg.nrrd's names), instead of or besides \"labels\"");
-    d.number("mesh_size").unit("m").positive().optional().doc("the largest cell and surface-facet size (give this or target_nodes)");
-    d.integer("target_nodes").at_least(100).unit("1").optional().doc("about this many nodes (within about 15%): sets mesh_size");
-    d.number("surface_distance").unit("m").positive().optional().doc(
-        "the largest distance between the mesh's surface facets and the labels' boundaries (default: the largest "
-        "voxel size)");
-    d.number_map("region_mesh_size").unit("m").positive().optional().doc(
-        "a smaller mesh size for some regions, by region name (a segment's name, or \"label_N\"): the largest cell "
-        "size inside the region and facet size on its boundary, e.g. {\"brain_stem\": 0.0012}: flat facets cut off a "
-        "fraction of a curved region's volume that grows as (size / curvature radius)^2 (the brain phantom's stem: "
-        "0.96% at 2.45 mm, 0.32% at 1.2 mm)");
-    d.boolean("smooth").defaults(false).doc(
-        "place the boundaries on a smooth surface through the voxels (weighted labels: each label's indicator smoothed "
-        "over a voxel) rather than along their staircase: for large smooth organs (the brain phantom's surface lies "
-        "within 0.19 mm of the analytic one at its top); it shrinks small or sharp regions (a sphere of 7 voxels' "
-        "radius by 9% of its volume), which the default keeps at the voxels' boundaries");
+    d.string("path").doc("the label map; a relative path is taken from the scene's folder").to<&Settings::path>();
+    d.number_list("labels")
+        .unit("1")
+        .optional()
+        .doc("label values to mesh (default: every label but 0); the others are outside the body")
+        .to<&Settings::labels>();
+    d.string_list("segments")
+        .optional()
+        .doc("segment names to mesh (a .seg.nrrd's names), instead of or besides \"labels\"")
+        .to<&Settings::segments>();
+    d.number("mesh_size")
+        .unit("m")
+        .positive()
+        .optional()
+        .doc("the largest cell and surface-facet size (give this or target_nodes)")
+        .to<&Settings::mesh_size>();
+    d.integer("target_nodes")
+        .at_least(100)
+        .unit("1")
+        .optional()
+        .doc("about this many nodes (within about 15%): sets mesh_size")
+        .to<&Settings::target_nodes>();
+    d.number("surface_distance")
+        .unit("m")
+        .positive()
+        .optional()
+        .doc(
+            "the largest distance between the mesh's surface facets and the labels' boundaries (default: the largest "
+            "voxel size)")
+        .to<&Settings::surface_distance>();
+    d.number_map("region_mesh_size")
+        .unit("m")
+        .positive()
+        .optional()
+        .doc(
+            "a smaller mesh size for some regions, by region name (a segment's name, or \"label_N\"): the largest cell "
+            "size inside the region and facet size on its boundary, e.g. {\"brain_stem\": 0.0012}: flat facets cut off "
+            "a "
+            "fraction of a curved region's volume that grows as (size / curvature radius)^2 (the brain phantom's stem: "
+            "0.96% at 2.45 mm, 0.32% at 1.2 mm)")
+        .to<&Settings::region_mesh_size>();
+    d.boolean("smooth")
+        .defaults(false)
+        .doc(
+            "place the boundaries on a smooth surface through the voxels (weighted labels: each label's indicator "
+            "smoothed "
+            "over a voxel) rather than along their staircase: for large smooth organs (the brain phantom's surface "
+            "lies "
+            "within 0.19 mm of the analytic one at its top); it shrinks small or sharp regions (a sphere of 7 voxels' "
+            "radius by 9% of its volume), which the default keeps at the voxels' boundaries")
+        .to<&Settings::smooth>();
     d.example({{"path", "brain.nii.gz"}, {"target_nodes", 20000}});
   }
 
-  explicit LabelMapMesh(const Parameters& p) : p_(p) {
-    if (p.has("mesh_size") == p.has("target_nodes"))
+  explicit LabelMapMesh(const Parameters& p) : p_(p), settings_(p.read<Settings>()) {
+    if (settings_.mesh_size.has_value() == settings_.target_nodes.has_value())
       throw InputError(p.pointer("mesh_size"), "give exactly one of mesh_size (m) and target_nodes");
   }
 
   TetMesh load(const MeshContext& context) override {
     const auto start = std::chrono::steady_clock::now();
-    std::filesystem::path file = p_.string("path");
+    std::filesystem::path file = settings_.path;
     if (file.is_relative()) file = context.scene_directory / file;
     const LabelImage image = read_label_image(file);
     const auto counts = image.voxel_counts();
     const std::set<std::int32_t> meshed = meshed_labels(image, counts);
     CGAL::Random random(0);
     const CGAL::Image_3 cgal = cgal_image(image, meshed);
-    const CGAL::Image_3 weights = p_.boolean("smooth") ? label_weights(cgal) : CGAL::Image_3();
+    const CGAL::Image_3 weights = settings_.smooth ? label_weights(cgal) : CGAL::Image_3();
     const Domain domain = Domain::create_labeled_image_mesh_domain(
         cgal, CGAL::parameters::weights = weights, CGAL::parameters::relative_error_bound = 1e-6,
         CGAL::parameters::p_rng = &random);
     double h = mesh_size(image, meshed, counts);
-    const double distance = p_.optional_number("surface_distance").value_or(image.spacing().maxCoeff());
+    const double distance = settings_.surface_distance.value_or(image.spacing().maxCoeff());
     const auto sizes = region_sizes(image, meshed);
-    if (p_.has("target_nodes")) {  // a trial refinement first, to size h by its count (N ~ 1 / h^3)
-      const double target = static_cast<double>(p_.integer("target_nodes"));
+    if (settings_.target_nodes) {  // a trial refinement first, to size h by its count (N ~ 1 / h^3)
+      const double target = static_cast<double>(*settings_.target_nodes);
       h *= std::cbrt(static_cast<double>(generate(domain, cgal, {h, sizes}, distance, image, false).node_count()) /
                      target);
     }
@@ -196,10 +229,21 @@ class LabelMapMesh final : public MeshSource {
   }
 
  private:
+  struct Settings {
+    std::string path;
+    std::optional<std::vector<double>> labels;
+    std::optional<std::vector<std::string>> segments;
+    std::optional<double> mesh_size;
+    std::optional<long> target_nodes;
+    std::optional<double> surface_distance;
+    std::optional<std::map<std::string, double>> region_mesh_size;
+    bool smooth = false;
+  };
+
   std::set<std::int32_t> meshed_labels(const LabelImage& image, const std::map<std::int32_t, std::int64_t>& counts) const {
     std::set<std::int32_t> meshed;
-    const auto values = p_.has("labels") ? p_.number_list("labels") : std::vector<double>{};
-    const auto names = p_.has("segments") ? p_.string_list("segments") : std::vector<std::string>{};
+    const auto values = settings_.labels.value_or(std::vector<double>{});
+    const auto names = settings_.segments.value_or(std::vector<std::string>{});
     for (std::size_t i = 0; i < values.size(); ++i) {
       const auto label = static_cast<std::int32_t>(values[i]);
       if (label == 0 || static_cast<double>(label) != values[i] || counts.count(label) == 0)
@@ -243,10 +287,10 @@ class LabelMapMesh final : public MeshSource {
   // region_mesh_size by label; every name must be a meshed region's.
   std::map<std::int32_t, double> region_sizes(const LabelImage& image, const std::set<std::int32_t>& meshed) const {
     std::map<std::int32_t, double> by_label;
-    if (!p_.has("region_mesh_size")) return by_label;
+    if (!settings_.region_mesh_size) return by_label;
     std::map<std::string, std::int32_t> labels;
     for (const std::int32_t label : meshed) labels[region_name(image, label)] = label;
-    for (const auto& [name, size] : p_.number_map("region_mesh_size")) {
+    for (const auto& [name, size] : *settings_.region_mesh_size) {
       const auto it = labels.find(name);
       if (it == labels.end()) {
         std::vector<std::string> known;
@@ -263,13 +307,13 @@ class LabelMapMesh final : public MeshSource {
 
   double mesh_size(const LabelImage& image, const std::set<std::int32_t>& meshed,
                    const std::map<std::int32_t, std::int64_t>& counts) const {
-    if (p_.has("mesh_size")) return p_.number("mesh_size");
+    if (settings_.mesh_size) return *settings_.mesh_size;
     const Vec3 s = image.spacing();
     std::int64_t voxels = 0;
     for (const auto& [label, count] : counts)
       if (meshed.count(label) != 0) voxels += count;
     const double volume = static_cast<double>(voxels) * s[0] * s[1] * s[2];
-    return std::cbrt(kNodesPerCellVolume * volume / static_cast<double>(p_.integer("target_nodes")));
+    return std::cbrt(kNodesPerCellVolume * volume / static_cast<double>(*settings_.target_nodes));
   }
 
   // Delaunay refinement to the criteria, then (when `optimise`) the sliver exudation, which changes no vertex. The
@@ -305,6 +349,7 @@ class LabelMapMesh final : public MeshSource {
   static TetMesh to_tet_mesh(const Complex& complex, const LabelImage& image);
 
   Parameters p_;
+  Settings settings_;
 };
 
 // The complex's cells as tets in the image's frame: CGAL meshes in voxel-size-scaled index space, x = origin + R s

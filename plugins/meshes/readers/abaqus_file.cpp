@@ -651,7 +651,8 @@ class AbaqusFileReader final : public MeshSource {
             "Element sets that become regions, in this order. Empty: the sets of the *SOLID SECTION lines, else "
             "the sets named by ELSET= on the *ELEMENT lines of the tets; no set at all gives one region \"all\". For "
             "Gmsh's .inp export, whose *ELEMENT sets are named after entities (Volume1), list the physical groups' "
-            "sets here.");
+            "sets here.")
+        .to<&Settings::regions>();
     d.example({{"path", "tests/data/meshes/cube.inp"}, {"scale", 1.0}});
   }
 
@@ -659,12 +660,15 @@ class AbaqusFileReader final : public MeshSource {
 
   TetMesh load(const MeshContext& context) override {
     const auto file = mesh_readers::read_mesh_file(parameters_, context);
-    TetMesh mesh = InpParser(file).parse(parameters_.string_list("regions"), parameters_.pointer("regions"));
-    mesh_readers::finish_mesh(mesh, parameters_.number("scale"), file.label);
+    TetMesh mesh = InpParser(file).parse(parameters_.read<Settings>().regions, parameters_.pointer("regions"));
+    mesh_readers::finish_mesh(mesh, parameters_.read<mesh_readers::FileSettings>().scale, file.label);
     return mesh;
   }
 
  private:
+  struct Settings {
+    std::vector<std::string> regions;
+  };
   Parameters parameters_;
 };
 

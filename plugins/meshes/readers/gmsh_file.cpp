@@ -688,8 +688,10 @@ class GmshFileReader final : public MeshSource {
     d.string("reader")
         .defaults("auto")
         .choices({"auto", "gmsh"})
-        .doc("\"auto\": ASCII MSH 2.2 and 4.1 through mtled's parser, binary files through Gmsh's reader (libgmsh); "
-             "\"gmsh\": every file through Gmsh's reader (MSH 1, 2.x, 4.0, 4.1), whose messages name no line");
+        .doc(
+            "\"auto\": ASCII MSH 2.2 and 4.1 through mtled's parser, binary files through Gmsh's reader (libgmsh); "
+            "\"gmsh\": every file through Gmsh's reader (MSH 1, 2.x, 4.0, 4.1), whose messages name no line")
+        .to<&Settings::reader>();
     d.example({{"path", "tests/data/meshes/cube_gmsh41.msh"}, {"scale", 1.0}});
   }
 
@@ -698,13 +700,16 @@ class GmshFileReader final : public MeshSource {
   TetMesh load(const MeshContext& context) override {
     const auto file = mesh_readers::read_mesh_file(parameters_, context);
     TetMesh mesh = through_gmsh(file) ? read_with_gmsh(file) : MshParser(file).parse();
-    mesh_readers::finish_mesh(mesh, parameters_.number("scale"), file.label);
+    mesh_readers::finish_mesh(mesh, parameters_.read<mesh_readers::FileSettings>().scale, file.label);
     return mesh;
   }
 
  private:
+  struct Settings {
+    std::string reader;
+  };
   bool through_gmsh(const MeshFileText& file) const {
-    return parameters_.string("reader") == "gmsh" || (kWithGmsh && msh::is_binary(file.text));
+    return parameters_.read<Settings>().reader == "gmsh" || (kWithGmsh && msh::is_binary(file.text));
   }
 
   TetMesh read_with_gmsh(const MeshFileText& file) const {

@@ -54,12 +54,14 @@ class VtkFileReader final : public MeshSource {
         .doc(
             "The integer cell array that gives each tet its region; regions are named by its values (\"1\", "
             "\"2\", ...). \"auto\": the first of \"region\", \"gmsh:physical\", \"CellEntityIds\", \"MaterialIds\" and "
-            "\"medit:ref\" the file has, else one region \"all\"; \"none\": one region \"all\" whatever the file has.");
+            "\"medit:ref\" the file has, else one region \"all\"; \"none\": one region \"all\" whatever the file has.")
+        .to<&Settings::region_array>();
     d.string_list("node_set_arrays")
         .defaults(json::array())
         .doc(
             "Point arrays that mark node sets: each becomes a node set of the same name holding the points where "
-            "the array is not 0 (so one point can be in several sets). Empty: no node sets.");
+            "the array is not 0 (so one point can be in several sets). Empty: no node sets.")
+        .to<&Settings::node_set_arrays>();
     d.example({{"path", "tests/data/meshes/cube.vtu"}, {"node_set_arrays", {"bottom", "top"}}});
   }
 
@@ -68,8 +70,9 @@ class VtkFileReader final : public MeshSource {
   TetMesh load(const MeshContext& context) override {
     const auto file = mesh_readers::read_mesh_file(parameters_, context);
     const std::string extension = mesh_readers::lowercase(file.path.extension().string());
-    const std::string region_array = parameters_.string("region_array");
-    const std::vector<std::string> node_set_arrays = parameters_.string_list("node_set_arrays");
+    const Settings settings = parameters_.read<Settings>();
+    const std::string& region_array = settings.region_array;
+    const std::vector<std::string>& node_set_arrays = settings.node_set_arrays;
 
     vtk::ArrayRequest request;
     if (region_array == "auto")
@@ -104,11 +107,15 @@ class VtkFileReader final : public MeshSource {
     for (const auto& name : node_set_arrays) add_node_set(mesh, grid, name);
     // An mtled result written in millimetres says so (LENGTH_UNIT): back to metres before `scale`.
     const double file_unit = vtk::metres_per_length_unit(grid, file.label);
-    mesh_readers::finish_mesh(mesh, file_unit * parameters_.number("scale"), file.label);
+    mesh_readers::finish_mesh(mesh, file_unit * parameters_.read<mesh_readers::FileSettings>().scale, file.label);
     return mesh;
   }
 
  private:
+  struct Settings {
+    std::string region_array;
+    std::vector<std::string> node_set_arrays;
+  };
   void assign_regions(TetMesh& mesh, const vtk::UnstructuredGrid& grid, const std::string& choice,
                       const std::string& label) const {
     const vtk::DataArray* array = nullptr;

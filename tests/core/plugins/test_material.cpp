@@ -11,9 +11,9 @@ class TestMaterial final : public Material {
  public:
   static void declare(ComponentDeclaration& d) {
     d.summary("test only");
-    d.number("modulus").unit("Pa").positive().defaults(1000.0).doc("test modulus");
+    d.number("modulus").unit("Pa").positive().defaults(1000.0).doc("test modulus").to<&Settings::modulus>();
   }
-  explicit TestMaterial(const Parameters& p) : modulus_(p.number("modulus")) {
+  explicit TestMaterial(const Parameters& p) : modulus_(p.read<Settings>().modulus) {
 #ifdef MTLED_TEST_THROW_IN_CONSTRUCTOR
     throw std::runtime_error("deliberate failure inside the plugin's constructor");
 #endif
@@ -27,6 +27,9 @@ class TestMaterial final : public Material {
   double energy(const Mat3&) const noexcept override { return 0.0; }
 
  private:
+  struct Settings {
+    double modulus = 0.0;
+  };
   double modulus_;
 };
 

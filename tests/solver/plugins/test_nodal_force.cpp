@@ -11,10 +11,10 @@ class TestNodalForce final : public BoundaryCondition {
  public:
   static void declare(ComponentDeclaration& d) {
     d.summary("test only: a total force split equally among the nodes of a mesh group");
-    d.string("group").doc("mesh node group");
-    d.vector3("force").unit("N").doc("total force at the full load");
+    d.string("group").doc("mesh node group").to<&Settings::group>();
+    d.vector3("force").unit("N").doc("total force at the full load").to<&Settings::force>();
   }
-  explicit TestNodalForce(const Parameters& p) : group_(p.string("group")), total_(p.vector3("force")) {
+  explicit TestNodalForce(const Parameters& p) : group_(p.read<Settings>().group), total_(p.read<Settings>().force) {
     forces_.name = "test_force";
   }
   void setup(const Discretisation& model) override {
@@ -31,6 +31,10 @@ class TestNodalForce final : public BoundaryCondition {
   std::vector<NodalForces*> forces() override { return {&forces_}; }
 
  private:
+  struct Settings {
+    std::string group;
+    Vec3 force = Vec3::Zero();
+  };
   std::string group_;
   Vec3 total_;
   NodalForces forces_;

@@ -15,7 +15,12 @@
 
 namespace mtled::mesh_readers {
 
-// Declares "path" (required) and "scale" (default 1). `format` names the files the reader takes, for the doc.
+// Declares "path" (required) and "scale" (default 1), bound to FileSettings. `format` names the files the reader
+// takes, for the doc.
+struct FileSettings {
+  std::string path;
+  double scale = 1.0;
+};
 void declare_file_parameters(ComponentDeclaration& declaration, std::string_view format);
 
 struct MeshFileText {

@@ -17,8 +17,17 @@
 
 namespace mtled {
 
-// The "output" section of a scene (validate_scene), declared by the writers.
+// The "output" section of a scene (validate_scene), declared by the writers; its values, Parameters::read.
 SceneSection output_section();
+struct OutputSettings {
+  long every_steps = 0;
+  long history_every_steps = 0;
+  std::vector<std::string> cell_data;
+  std::string vtu_format, length_unit;
+  std::optional<std::filesystem::path> displacement_field_like;
+  std::string displacement_field_format, displacement_field_direction;
+  double displacement_field_decay = 0.0;
+};
 VtuStyle vtu_style(const Parameters& output);
 
 // A StepMonitor that records steps into files. finish() completes them with the run's last state (once); the time

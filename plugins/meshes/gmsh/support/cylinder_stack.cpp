@@ -13,11 +13,16 @@
 namespace mtled {
 
 void declare_cylinder_axis(ComponentDeclaration& declaration) {
-  declaration.number("radius").at_least(kMinLength).unit("m").doc("radius of the cylinder");
+  declaration.number("radius")
+      .at_least(kMinLength)
+      .unit("m")
+      .doc("radius of the cylinder")
+      .to<&CylinderStack::radius>();
   declaration.vector3("base_center")
       .defaults({0.0, 0.0, 0.0})
       .unit("m")
-      .doc("centre of the bottom face; the axis runs along +z from it");
+      .doc("centre of the bottom face; the axis runs along +z from it")
+      .to<&CylinderStack::base_center>();
 }
 
 GeometryMeasure build_cylinder_stack(const CylinderStack& stack) {

@@ -17,7 +17,7 @@ struct CylinderStack {
   std::vector<std::string> layer_names;  // one region per layer
 };
 
-// Declares "radius" and "base_center".
+// Declares "radius" and "base_center", bound to CylinderStack's (Parameters::read<CylinderStack>).
 void declare_cylinder_axis(ComponentDeclaration& declaration);
 
 // Builds one OCC cylinder per layer and fragments them into one conformal body (shared nodes across the

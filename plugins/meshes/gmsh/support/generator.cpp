@@ -72,18 +72,19 @@ struct Refinement {
   double ratio, distance, transition;
 };
 
-std::optional<Refinement> read_refinement(const Parameters& p, const GeneratorRequest& request) {
-  const auto from = p.optional_vector3("refine_from");
-  const auto to = p.optional_vector3("refine_to");
-  const bool rims = request.rim_curves && p.boolean("refine_rims");
+std::optional<Refinement> read_refinement(const MeshSizeSettings& size, const Parameters& p,
+                                          const GeneratorRequest& request) {
+  const auto& from = size.refine_from;
+  const auto& to = size.refine_to;
+  const bool rims = request.rim_curves && size.refine_rims;
   if (!from && !to && !rims) return std::nullopt;
   if (static_cast<bool>(from) != static_cast<bool>(to))
     throw InputError(p.pointer(from ? "refine_to" : "refine_from"),
                      "refine_from and refine_to go together: give both ends of the segment to refine along (for a "
                      "needle, its entry point and its tip at the final depth)");
-  const double distance = p.number("refine_distance");
-  Refinement refinement{std::nullopt, rims, p.number("refine_ratio"), distance,
-                        p.optional_number("refine_transition").value_or(2.0 * distance)};
+  const double distance = size.refine_distance;
+  Refinement refinement{std::nullopt, rims, size.refine_ratio, distance,
+                        size.refine_transition.value_or(2.0 * distance)};
   if (from) refinement.segment = std::make_pair(*from, *to);
   return refinement;
 }
@@ -198,8 +199,8 @@ double coarsest_size(const GeneratorRequest& request) {
   return request.max_mesh_size ? request.max_mesh_size->size : std::numeric_limits<double>::infinity();
 }
 
-Generation calibrated_generation(Generator& generator, const Parameters& parameters, const GeneratorRequest& request) {
-  const long target = parameters.integer("target_nodes");
+Generation calibrated_generation(Generator& generator, long target, const Parameters& parameters,
+                                 const GeneratorRequest& request) {
   const double goal = static_cast<double>(target);
   const GeometryMeasure& measure = generator.measure();
   const double coarsest = coarsest_size(request);
@@ -303,7 +304,8 @@ void declare_mesh_size(ComponentDeclaration& declaration, long default_target_no
       .doc(
           "number of mesh nodes wanted: the mesh size is calibrated (a few deterministic generations) until the "
           "node count is within +-3% of it (on coarse meshes, where the count jumps in steps, the closest is kept "
-          "with a warning); ignored when mesh_size is given");
+          "with a warning); ignored when mesh_size is given")
+      .to<&MeshSizeSettings::target_nodes>();
   declaration.number("mesh_size")
       .optional()
       .positive()
@@ -311,7 +313,8 @@ void declare_mesh_size(ComponentDeclaration& declaration, long default_target_no
       .doc(
           "target tet edge length (Gmsh's Mesh.MeshSizeMax), used directly in one generation; when given, "
           "target_nodes is ignored. Refused when it would give more than 5 million nodes, or when it exceeds a "
-          "cylinder's radius");
+          "cylinder's radius")
+      .to<&MeshSizeSettings::mesh_size>();
   declaration.number("jitter")
       .defaults(0.0)
       .at_least(0.0)
@@ -320,27 +323,39 @@ void declare_mesh_size(ComponentDeclaration& declaration, long default_target_no
       .doc(
           "for stability studies: move each interior node randomly by up to this fraction of its mean edge length "
           "(deterministic; moves that would leave a tet with under 1% of its volume are shortened), giving an "
-          "irregular, sliver-rich cloud; 0 keeps Gmsh's nodes");
-  declaration.vector3("refine_from").optional().unit("m").doc(
-      "with refine_to: refine the mesh along the segment between them (for a needle: its entry point and its tip "
-      "at the final depth); target_nodes then counts the refined mesh's nodes");
-  declaration.vector3("refine_to").optional().unit("m").doc("the other end of the segment to refine along");
+          "irregular, sliver-rich cloud; 0 keeps Gmsh's nodes")
+      .to<&MeshSizeSettings::jitter>();
+  declaration.vector3("refine_from")
+      .optional()
+      .unit("m")
+      .doc(
+          "with refine_to: refine the mesh along the segment between them (for a needle: its entry point and its tip "
+          "at the final depth); target_nodes then counts the refined mesh's nodes")
+      .to<&MeshSizeSettings::refine_from>();
+  declaration.vector3("refine_to")
+      .optional()
+      .unit("m")
+      .doc("the other end of the segment to refine along")
+      .to<&MeshSizeSettings::refine_to>();
   declaration.number("refine_ratio")
       .defaults(0.4)
       .greater_than(0.0)
       .at_most(1.0)
       .unit("1")
-      .doc("mesh size near the segment (and the rims, with refine_rims) as a fraction of the size elsewhere");
+      .doc("mesh size near the segment (and the rims, with refine_rims) as a fraction of the size elsewhere")
+      .to<&MeshSizeSettings::refine_ratio>();
   declaration.number("refine_distance")
       .defaults(0.002)
       .positive()
       .unit("m")
-      .doc("distance from the segment (and the rims) within which the refined size holds");
+      .doc("distance from the segment (and the rims) within which the refined size holds")
+      .to<&MeshSizeSettings::refine_distance>();
   declaration.number("refine_transition")
       .optional()
       .positive()
       .unit("m")
-      .doc("distance beyond refine_distance over which the size grows back (default: 2 x refine_distance)");
+      .doc("distance beyond refine_distance over which the size grows back (default: 2 x refine_distance)")
+      .to<&MeshSizeSettings::refine_transition>();
 }
 
 void declare_rim_refinement(ComponentDeclaration& declaration) {
@@ -351,11 +366,11 @@ void declare_rim_refinement(ComponentDeclaration& declaration) {
           "refine_ratio, refine_distance and refine_transition): where bonded faces meet a free side the stress is "
           "singular, and a cloud graded there gets the platen force closer with a fifth of the nodes of a uniform "
           "one (docs/validation.md); "
-          "target_nodes then counts the refined mesh's nodes");
+          "target_nodes then counts the refined mesh's nodes")
+      .to<&MeshSizeSettings::refine_rims>();
 }
 
-Vec3 positive_extent(const Parameters& parameters, std::string_view name) {
-  const Vec3 extent = parameters.vector3(name);
+Vec3 positive_extent(const Vec3& extent, const Parameters& parameters, std::string_view name) {
   for (int axis = 0; axis < 3; ++axis)
     if (!(extent[axis] >= kMinLength))
       throw InputError(parameters.pointer(name),
@@ -369,12 +384,13 @@ std::string format_vector(const Vec3& v) { return fmt::format("[{:.6g}, {:.6g}, 
 
 TetMesh generate_tet_mesh(const Parameters& parameters, const GeneratorRequest& request) {
   const auto start = std::chrono::steady_clock::now();
-  const std::optional<double> mesh_size = parameters.optional_number("mesh_size");
-  const long target = parameters.integer("target_nodes");
+  const auto size = parameters.read<MeshSizeSettings>();
+  const std::optional<double>& mesh_size = size.mesh_size;
+  const long target = size.target_nodes;
   Generation result;
   try {
     GmshSession session;
-    Generator generator(request, read_refinement(parameters, request));
+    Generator generator(request, read_refinement(size, parameters, request));
     if (mesh_size) {
       const double estimate = model_node_count(generator.measure(), *mesh_size);
       if (estimate > kMaxEstimatedNodes)
@@ -390,7 +406,7 @@ TetMesh generate_tet_mesh(const Parameters& parameters, const GeneratorRequest& 
                                      coarsest_size(request)));
       result = generator.generate(*mesh_size);
     } else {
-      result = calibrated_generation(generator, parameters, request);
+      result = calibrated_generation(generator, target, parameters, request);
     }
     log().info("{}: {} nodes, {} tets, mesh size {:.4g} mm ({} generation{}{}), {:.2f} s", request.component,
                result.nodes, result.mesh.tet_count(), result.mesh_size * 1e3, generator.generations(),
@@ -402,7 +418,7 @@ TetMesh generate_tet_mesh(const Parameters& parameters, const GeneratorRequest& 
                                  e.what(), request.failure_advice));
   }
   result.mesh.source = request.description;
-  if (const double jitter = parameters.number("jitter"); jitter > 0.0) {
+  if (const double jitter = size.jitter; jitter > 0.0) {
     remove_unused_nodes(result.mesh);
     jitter_interior_nodes(result.mesh, jitter, request.component);
     result.mesh.source += fmt::format(", interior nodes jittered by {:g} edge lengths", jitter);

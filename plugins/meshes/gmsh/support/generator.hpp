@@ -19,6 +19,17 @@ void declare_mesh_size(ComponentDeclaration& declaration, long default_target_no
 // Declares "refine_rims" on a generator that sets GeneratorRequest::rim_curves.
 void declare_rim_refinement(ComponentDeclaration& declaration);
 
+// What the two declare their parameters into (generate_tet_mesh reads them).
+struct MeshSizeSettings {
+  long target_nodes = 0;
+  std::optional<double> mesh_size;
+  double jitter = 0.0;
+  std::optional<Vec3> refine_from, refine_to;
+  double refine_ratio = 0.0, refine_distance = 0.0;
+  std::optional<double> refine_transition;
+  bool refine_rims = false;  // false where the generator does not declare it
+};
+
 struct GeneratorRequest {
   std::string component;    // the generator's name, for log lines and messages
   std::string description;  // what is generated, with its dimensions: becomes TetMesh::source
@@ -60,9 +71,10 @@ TetMesh generate_tet_mesh(const Parameters& parameters, const GeneratorRequest& 
 // Lengths below this are refused: OpenCASCADE's modelling tolerance is 1e-7 m.
 inline constexpr double kMinLength = 1e-5;
 
-// A vector3 parameter whose components must each be >= kMinLength (extents): the kernel's range check on
-// vectors only covers |v| > 0, so each component is checked here. Throws InputError at its pointer.
-Vec3 positive_extent(const Parameters& parameters, std::string_view name);
+// An extent (the vector3 parameter `name` of `parameters`, its value `extent`) whose components must each be
+// >= kMinLength: the kernel's range check on vectors only covers |v| > 0, so each component is checked here. Throws
+// InputError at its pointer.
+Vec3 positive_extent(const Vec3& extent, const Parameters& parameters, std::string_view name);
 
 // "[0.03, 0.02, 0.01]" for descriptions and messages.
 std::string format_vector(const Vec3& v);

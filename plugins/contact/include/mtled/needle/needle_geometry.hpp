@@ -2,6 +2,7 @@
 // What every needle model shares: the straight needle's parameters and path, checks that it enters the
 // body, and the nodes along its path.
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@ struct NeedlePath {
   Vec3 direction = -Vec3::UnitZ();  // unit
   double depth = 0.0;               // final tip advance from the entry (m)
   double radius = 0.0;              // needle radius (m)
+  std::filesystem::path trajectory;  // the markups file it came from, if any
 
   // Axial coordinate of x along the path (0 at the entry, growing with insertion) and distance from the axis.
   double axial(const Vec3& x) const { return direction.dot(x - entry); }
@@ -26,9 +28,16 @@ struct NeedlePath {
   Vec3 tip(double advance) const { return entry + advance * direction; }
 };
 
-// Declares diameter, entry, direction, depth and trajectory (shared by all needle models). The path is either
-// entry (+ direction, depth) in metres, or a 3D Slicer markups file (.mrk.json) whose line, or whose first two
-// points, run from the entry to the target (depth: their distance unless given).
+// Declares diameter, entry, direction, depth and trajectory (shared by all needle models), bound to
+// NeedlePathSettings. The path is either entry (+ direction, depth) in metres, or a 3D Slicer markups file
+// (.mrk.json) whose line, or whose first two points, run from the entry to the target (depth: their distance unless
+// given).
+struct NeedlePathSettings {
+  double diameter = 0.0;
+  std::optional<Vec3> entry, direction;
+  std::optional<double> depth;
+  std::optional<std::filesystem::path> trajectory;
+};
 void declare_needle_path(ComponentDeclaration& d);
 NeedlePath read_needle_path(const Parameters& p);
 
