@@ -34,6 +34,11 @@ void Registry::check_category(const ComponentDeclaration& declaration, Category 
     if (p.unit.empty())
       throw std::logic_error(fmt::format("{} \"{}\": parameter \"{}\" has no unit (use \"1\" if dimensionless)",
                                          to_string(expected), declaration.name(), p.name));
+    // Each name written once: a parameter is read through the member it fills (a node set by NodeSelector::from).
+    if (p.binding.assign == nullptr && p.type != ParameterType::node_set)
+      throw std::logic_error(fmt::format("{} \"{}\": parameter \"{}\" is bound to no member: end its declaration with "
+                                         ".to<&Settings::member>() and read it with Parameters::read<Settings>()",
+                                         to_string(expected), declaration.name(), p.name));
   }
 }
 

@@ -2,7 +2,9 @@
 // allowed range and a suggestion.
 #include <gtest/gtest.h>
 
+#include "mtled/interfaces/material.hpp"
 #include "mtled/parameters.hpp"
+#include "mtled/registry.hpp"
 
 namespace mtled {
 namespace {
@@ -78,6 +80,22 @@ TEST(Parameters, BoundMembersAreFilledByRead) {
   EXPECT_EQ(given.read<BoundSettings>().capture, std::optional<double>(0.002));
   EXPECT_EQ(given.read<BoundSettings>().mu, 5.0);
   EXPECT_EQ(given.read<OtherSettings>().count, 2);
+}
+
+// A parameter declared but bound to no member would be read nowhere, or by a second spelling of its name: a plugin
+// that declares one is refused when it registers, naming the parameter.
+TEST(Parameters, RegistrationRefusesAParameterBoundToNoMember) {
+  ComponentDeclaration d("unbound", Category::material);
+  d.summary("a material with one parameter bound and one not");
+  d.number("mu").unit("Pa").positive().doc("shear modulus").to<&BoundSettings::mu>();
+  d.number("lambda").unit("Pa").positive().doc("Lame's first parameter");
+  Registry registry;
+  try {
+    registry.add<Material>(d, Factory<Material>{});
+    FAIL() << "registered a parameter bound to no member";
+  } catch (const std::logic_error& e) {
+    EXPECT_NE(std::string(e.what()).find("\"lambda\" is bound to no member"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Parameters, EveryProblemIsReportedInOnePass) {
