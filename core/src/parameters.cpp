@@ -326,24 +326,8 @@ std::map<std::string, double> Parameters::number_map(std::string_view name) cons
 std::vector<std::string> Parameters::string_list(std::string_view name) const {
   return value(name, ParameterType::string_list).get<std::vector<std::string>>();
 }
-std::optional<double> Parameters::optional_number(std::string_view name) const {
-  if (!has(name)) return std::nullopt;
-  return number(name);
-}
-std::optional<std::string> Parameters::optional_string(std::string_view name) const {
-  if (!has(name)) return std::nullopt;
-  return string(name);
-}
-std::optional<Vec3> Parameters::optional_vector3(std::string_view name) const {
-  if (!has(name)) return std::nullopt;
-  return vector3(name);
-}
 std::filesystem::path Parameters::file(std::string_view name) const {
   return std::filesystem::path(value(name, ParameterType::file).get<std::string>());
-}
-std::optional<std::filesystem::path> Parameters::optional_file(std::string_view name) const {
-  if (!has(name)) return std::nullopt;
-  return file(name);
 }
 
 std::string pointer_escape(std::string_view key) {

@@ -37,7 +37,7 @@ TEST(Parameters, DefaultsFillInAndOptionalStaysAbsent) {
   EXPECT_EQ(p.integer("points"), 1);
   EXPECT_EQ(p.string("basis"), "linear");
   EXPECT_EQ(p.vector3("direction"), Vec3(0, 0, -1));
-  EXPECT_FALSE(p.optional_number("capture").has_value());
+  EXPECT_FALSE(p.get<std::optional<double>>("capture").has_value());
   EXPECT_EQ(p.pointer("mu"), "/materials/0/mu");
 }
 

@@ -144,7 +144,7 @@ class ParameterBuilder {
   ParameterBuilder& doc(std::string text);
   ParameterBuilder& unit(std::string unit);
   ParameterBuilder& defaults(json value);
-  ParameterBuilder& optional();  // may be absent; the component reads it with Parameters::optional_*
+  ParameterBuilder& optional();  // may be absent: bound to a std::optional member
   ParameterBuilder& positive();
   ParameterBuilder& non_negative();
   ParameterBuilder& nonzero();
@@ -228,10 +228,6 @@ class Parameters {
   std::vector<std::string> string_list(std::string_view name) const;
   std::filesystem::path file(std::string_view name) const;  // as validate_scene resolved it
 
-  std::optional<double> optional_number(std::string_view name) const;
-  std::optional<std::string> optional_string(std::string_view name) const;
-  std::optional<Vec3> optional_vector3(std::string_view name) const;
-  std::optional<std::filesystem::path> optional_file(std::string_view name) const;
 
   // The settings struct whose members the declaration bound (ParameterBuilder::to), filled; members bound to no
   // parameter keep their default initialisers.
