@@ -184,7 +184,7 @@ class KinematicNeedle final : public NeedleModel {
     std::string drive, lateral, driven;
     std::optional<double> drag_limit;
     std::optional<long> settle_steps;
-    std::optional<double> capture_radius, strain_radius;
+    std::optional<double> capture_radius;
   };
 
   // What the paper leaves open: how far the shaft drags, how captured entries settle, the capture and strain radii.
@@ -221,14 +221,7 @@ class KinematicNeedle final : public NeedleModel {
             "larger of the needle radius and 0.6 x the node spacing at the entry, so a coarse cloud still has "
             "nodes on the path")
         .to<&Settings::capture_radius>();
-    d.number("strain_radius")
-        .unit("m")
-        .positive()
-        .optional()
-        .doc(
-            "integration points within this distance of the tip are watched for the puncture strain; default: "
-            "the larger of the needle diameter and the node spacing at the entry")
-        .to<&Settings::strain_radius>();
+    declare_strain_radius(d);
   }
 
   KinematicNeedle(const Parameters& p, const Settings& s)
@@ -239,7 +232,7 @@ class KinematicNeedle final : public NeedleModel {
         drag_limit_(s.drag_limit),
         settle_steps_(s.settle_steps),
         capture_radius_option_(s.capture_radius),
-        strain_radius_option_(s.strain_radius),
+        strain_radius_option_(p.read<TipStrainSettings>().strain_radius),
         from_reference_(s.drive == "from_reference"),
         return_to_path_(s.lateral == "path"),
         shaft_surface_(s.driven == "shaft_surface") {

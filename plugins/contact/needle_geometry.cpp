@@ -48,6 +48,17 @@ void declare_needle_path(ComponentDeclaration& d) {
       .to<&NeedlePathSettings::trajectory>();
 }
 
+void declare_strain_radius(ComponentDeclaration& d) {
+  d.number("strain_radius")
+      .unit("m")
+      .positive()
+      .optional()
+      .doc(
+          "integration points within this distance of the tip are watched for the puncture strain; default: the "
+          "larger of the needle diameter and the node spacing at the entry")
+      .to<&TipStrainSettings::strain_radius>();
+}
+
 namespace {
 
 // A needle's trajectory: the markup's first two placed points, the entry then the target.

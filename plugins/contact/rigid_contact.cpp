@@ -122,14 +122,7 @@ class RigidContactNeedle final : public NeedleModel {
             "the larger of the needle radius and 0.6 x the node spacing at the entry (as the kinematic model), so "
             "a coarse cloud still has a line of nodes along the shaft")
         .to<&Settings::capture_radius>();
-    d.number("strain_radius")
-        .unit("m")
-        .positive()
-        .optional()
-        .doc(
-            "integration points within this distance of the tip are watched for the puncture strain; default: "
-            "the larger of the needle diameter and the node spacing at the entry")
-        .to<&Settings::strain_radius>();
+    declare_strain_radius(d);
     d.integer("release_steps")
         .unit("1")
         .at_least(1)
@@ -267,7 +260,7 @@ class RigidContactNeedle final : public NeedleModel {
     double tip_angle = 0.0;
     double friction_coefficient = 0.0;
     double puncture_strain = 0.0;
-    std::optional<double> puncture_force, footprint_radius, capture_radius, strain_radius;
+    std::optional<double> puncture_force, footprint_radius, capture_radius;
     long release_steps = 0;
   };
 
@@ -282,7 +275,7 @@ class RigidContactNeedle final : public NeedleModel {
         puncture_force_(s.puncture_force),
         footprint_radius_option_(s.footprint_radius),
         capture_radius_option_(s.capture_radius),
-        strain_radius_option_(s.strain_radius),
+        strain_radius_option_(p.read<TipStrainSettings>().strain_radius),
         release_steps_(s.release_steps) {
     if (capture_radius_option_ && *capture_radius_option_ < path_.radius)
       throw InputError(

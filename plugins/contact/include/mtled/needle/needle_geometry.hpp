@@ -39,6 +39,12 @@ struct NeedlePathSettings {
   std::optional<std::filesystem::path> trajectory;
 };
 void declare_needle_path(ComponentDeclaration& d);
+
+// Declares "strain_radius", where a needle model watches for the puncture strain, bound to TipStrainSettings.
+struct TipStrainSettings {
+  std::optional<double> strain_radius;
+};
+void declare_strain_radius(ComponentDeclaration& d);
 NeedlePath read_needle_path(const Parameters& p);
 
 
