@@ -43,7 +43,7 @@ Evaluator::Evaluator(const Plan& plan, const fs::path& output, const std::vector
                      std::string log_level, fs::path executable)
     : plan_(plan),
       output_(output),
-      executable_(executable.empty() ? fs::read_symlink("/proc/self/exe") : std::move(executable)),
+      executable_(executable.empty() ? mtled_program("mtled") : std::move(executable)),
       plugin_paths_(plugin_paths),
       log_level_(std::move(log_level)),
       catalog_(std::make_unique<PluginCatalog>(plugin_search_path(plugin_paths, {}))) {

@@ -6,6 +6,7 @@
 
 #include "mtled/analysis/child_run.hpp"
 #include "mtled/analysis/study.hpp"
+#include "mtled/plugin_catalog.hpp"
 #include "study_support.hpp"
 
 namespace fs = std::filesystem;
@@ -58,7 +59,10 @@ void explain_failure(Row& row, const RunOutcome& outcome, double timeout_s, cons
 }  // namespace
 
 Runner::Runner(const Study& study, const Settings& settings, const fs::path& output)
-    : study_(study), settings_(settings), runs_(output / "runs"), executable_(fs::read_symlink("/proc/self/exe")),
+    : study_(study),
+      settings_(settings),
+      runs_(output / "runs"),
+      executable_(mtled_program("mtled")),
       threads_(settings.threads > 0 ? settings.threads : study.threads) {}
 
 Row Runner::reused(const Configuration& c, const std::string& counter) const {

@@ -43,7 +43,7 @@ int conformance_command(const ConformanceOptions& options, const std::vector<fs:
     throw InputError(options.library.string(),
                      "not an mtled plugin: its file name must be mtled-CATEGORY-NAME.so (as mtled_add_plugin() "
                      "names it), or a folder holding such files");
-  const fs::path runner = executable_directory() / "mtled-conformance";
+  const fs::path runner = mtled_program("mtled-conformance");
   if (!fs::exists(runner, ec))
     throw std::runtime_error(fmt::format("{} is missing: this mtled was built without its conformance runner "
                                          "(MTLED_BUILD_CONFORMANCE_RUNNER=OFF)",

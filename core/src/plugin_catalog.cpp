@@ -5,8 +5,9 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
-#include <boost/dll/shared_library.hpp>
 #include <algorithm>
+#include <boost/dll/runtime_symbol_info.hpp>
+#include <boost/dll/shared_library.hpp>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -57,10 +58,10 @@ bool same_contents(const fs::path& a, const fs::path& b) {
 }
 }  // namespace
 
-fs::path executable_directory() {
-  std::error_code ec;
-  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  return ec ? fs::current_path() : self.parent_path();
+fs::path kernel_library_directory() { return fs::path(boost::dll::this_line_location()).parent_path(); }
+
+fs::path mtled_program(const std::string& name) {
+  return (kernel_library_directory() / MTLED_BINDIR_FROM_LIBDIR / name).lexically_normal();
 }
 
 std::vector<fs::path> plugin_search_path(const std::vector<fs::path>& command_line, const std::vector<fs::path>& scene) {
@@ -70,7 +71,7 @@ std::vector<fs::path> plugin_search_path(const std::vector<fs::path>& command_li
     const auto listed = split_path_list(env);
     path.insert(path.end(), listed.begin(), listed.end());
   } else {
-    path.push_back(executable_directory().parent_path() / "lib" / "mtled" / "plugins");
+    path.push_back(kernel_library_directory() / "mtled" / "plugins");
   }
   return path;
 }

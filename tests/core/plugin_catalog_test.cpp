@@ -127,11 +127,17 @@ TEST(PluginSearchPath, EnvironmentReplacesTheDefault) {
   ASSERT_EQ(path.size(), 3u);
   EXPECT_EQ(path[0], fs::path("/cli"));
   EXPECT_EQ(path[1], fs::path("/scene"));
-  EXPECT_EQ(path[2], executable_directory().parent_path() / "lib" / "mtled" / "plugins");
+  // The build tree's plugin folder, found from the kernel library's folder (not this test program's).
+  EXPECT_EQ(fs::weakly_canonical(path[2]), fs::weakly_canonical(MTLED_TEST_PLUGIN_DIR));
   ::setenv("MTLED_PLUGIN_PATH", "/a:/b", 1);
   path = plugin_search_path({}, {});
   EXPECT_EQ(path, (std::vector<fs::path>{"/a", "/b"}));
   ::unsetenv("MTLED_PLUGIN_PATH");
+}
+
+TEST(PluginSearchPath, ProgramsAreFoundInTheBinFolderOfTheKernelLibrarysTree) {
+  // This test program is not mtled, yet mtled is found: the build tree's, as CMake built it.
+  EXPECT_EQ(fs::weakly_canonical(mtled_program("mtled")), fs::weakly_canonical(MTLED_EXECUTABLE));
 }
 
 }  // namespace

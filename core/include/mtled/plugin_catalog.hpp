@@ -14,12 +14,17 @@
 namespace mtled {
 
 // The folders searched, in order: --plugin-path folders, the scene's plugin_paths, then MTLED_PLUGIN_PATH
-// (colon-separated) if set, otherwise the default: lib/mtled/plugins beside the executable's bin/ (the
-// install location for an installed mtled, the build tree's plugin folder for a build-tree mtled).
+// (colon-separated) if set, otherwise the default: mtled/plugins beside the kernel's own library, libmtled_core.so
+// (the install location for an installed mtled, the build tree's plugin folder for a build-tree mtled), so that the
+// command line and the Python module find the same plugins.
 std::vector<std::filesystem::path> plugin_search_path(const std::vector<std::filesystem::path>& command_line,
                                                       const std::vector<std::filesystem::path>& scene);
 
-std::filesystem::path executable_directory();
+// The folder of the kernel's own library, libmtled_core.so (lib/ of the build or install tree).
+std::filesystem::path kernel_library_directory();
+// mtled's program `name` ("mtled", "mtled-conformance") in the bin/ of the same tree, for whoever runs one as a child
+// process (mtled study, mtled fit: also when called from the Python module, whose process is python3).
+std::filesystem::path mtled_program(const std::string& name);
 
 class PluginCatalog {
  public:

@@ -4,12 +4,13 @@
 #include <omp.h>
 
 #include "mtled/log.hpp"
+#include "mtled/process_lock.hpp"
 
 namespace mtled {
 
 GmshError::~GmshError() = default;
 
-GmshSession::GmshSession() : host_threads_(omp_get_max_threads()) {
+GmshSession::GmshSession() : lock_(process_lock("gmsh")), host_threads_(omp_get_max_threads()) {
   gmsh_checked([] { gmsh::initialize(0, nullptr, /*readConfigFiles=*/false); });
   try {
     set_options();

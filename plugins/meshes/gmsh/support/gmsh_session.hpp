@@ -1,6 +1,8 @@
 #pragma once
 // Gmsh keeps one global state per process (options, models, meshes). A generator owns it for the length
-// of one load(): GmshSession initialises it with fixed settings and finalises it on every exit path.
+// of one load(): GmshSession takes the process's Gmsh lock (scenes set up at once in one process take turns),
+// initialises Gmsh with fixed settings and finalises it on every exit path.
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
@@ -28,6 +30,7 @@ class GmshSession {
 
  private:
   static void set_options();
+  std::unique_lock<std::mutex> lock_;
   int host_threads_;  // OpenMP threads before Gmsh changed them, restored on finalise
 };
 
