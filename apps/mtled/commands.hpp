@@ -86,6 +86,8 @@ struct ConformanceOptions {
 // Each returns the process exit code (0 ok, 2 invalid input, 3 instability, 1 anything else); InputError
 // and other exceptions propagate to main, which prints them and picks the code.
 int run_scene(const RunOptions& options);
+// A run's threads: `requested` when positive, else OMP_NUM_THREADS when set (the OpenMP convention), else every core.
+int run_thread_count(int requested);
 int validate_scene_command(const SceneOptions& options);
 int mesh_command(const MeshOptions& options);
 int list_plugins(const std::vector<std::filesystem::path>& plugin_paths, bool as_json, bool as_markdown,

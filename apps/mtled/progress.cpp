@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "scene_run.hpp"
+
 namespace mtled::app {
 
 Progress::Progress(bool enabled)
@@ -42,7 +44,7 @@ void Progress::finish() {
 namespace mtled::app {
 
 void ProgressWriter::after_step(const StepRecord& step) {
-  if (interrupted_) throw Interrupted();
+  if (interrupted_) throw RunStopped("interrupted", "interrupted (Ctrl-C)");
   if (!progress_.due()) return;
   std::string text = fmt::format("step {}  t {:.4g} s", step.load.step, step.load.time);
   if (step.needle)

@@ -24,12 +24,8 @@ class Progress {
   std::chrono::steady_clock::time_point start_, last_;
 };
 
-struct Interrupted : std::runtime_error {
-  Interrupted() : std::runtime_error("interrupted (Ctrl-C)") {}
-};
-
-// The run's terminal: the progress display after every step, and the end of the run (Interrupted) once `interrupted`
-// is set (by Ctrl-C).
+// The run's terminal: the progress display after every step, and the end of the run (RunStopped "interrupted") once
+// `interrupted` is set (by Ctrl-C).
 class ProgressWriter final : public OutputWriter {
  public:
   ProgressWriter(bool enabled, const std::atomic<bool>& interrupted) : progress_(enabled), interrupted_(interrupted) {}

@@ -11,6 +11,7 @@
 #include "mtled/analysis/scene_sections.hpp"
 #include "mtled/monitors/scene_monitors.hpp"
 #include "processes.hpp"
+#include "progress.hpp"
 #include "scene_run.hpp"
 
 namespace mtled::app {
@@ -19,13 +20,6 @@ namespace {
 
 std::atomic<bool> interrupted{false};
 extern "C" void on_interrupt(int) { interrupted = true; }
-
-// --threads, else OMP_NUM_THREADS when set (the OpenMP convention), else every core.
-int thread_count(const RunOptions& options) {
-  if (options.threads > 0) return options.threads;
-  if (std::getenv("OMP_NUM_THREADS")) return omp_get_max_threads();
-  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-}
 
 // A rank other than 0: the same simulation and checks, which take part in every exchange of forces; no files.
 int replica_run(const Scene& scene, PluginCatalog& catalog) {
@@ -42,6 +36,12 @@ int replica_run(const Scene& scene, PluginCatalog& catalog) {
 
 }  // namespace
 
+int run_thread_count(int requested) {
+  if (requested > 0) return requested;
+  if (std::getenv("OMP_NUM_THREADS")) return omp_get_max_threads();
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
 int run_scene(const RunOptions& options) {
   const auto wall_start = SceneRun::Clock::now();
   SceneDocument document = read_scene(options.scene.scene, options.scene.overrides);
@@ -52,11 +52,14 @@ int run_scene(const RunOptions& options) {
   // its step and written "interrupted" (then the launcher ends them).
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
-  const int threads = thread_count(options);
+  const int threads = run_thread_count(options.threads);
   omp_set_num_threads(threads);
   if (!processes().writes()) return replica_run(scene, catalog);
   SceneRun run(options, scene, catalog, threads, wall_start);
-  return run.run(options.progress, interrupted);
+  std::vector<std::shared_ptr<StepMonitor>> observers;
+  if (auto failure = injected_failure()) observers.push_back(failure);
+  observers.push_back(std::make_shared<ProgressWriter>(options.progress, interrupted));
+  return run.run(observers);
 }
 
 }  // namespace mtled::app

@@ -6,8 +6,6 @@
 #include "mtled/log.hpp"
 #include "mtled/simd.hpp"
 #include "mtled/version.hpp"
-#include "processes.hpp"
-#include "progress.hpp"
 
 namespace fs = std::filesystem;
 
@@ -41,16 +39,17 @@ SceneRun::SceneRun(const RunOptions& options, const Scene& scene, PluginCatalog&
                          {"threads", threads},
                          {"simd", simd::current()}}) {}
 
-int SceneRun::run(bool progress, const std::atomic<bool>& interrupted) {
+int SceneRun::run(const std::vector<std::shared_ptr<StepMonitor>>& observers) {
   try {
     const auto setup_start = Clock::now();
     simulation_ = std::make_unique<Simulation>(scene_, catalog_);
     check_displacement_field();
     folded_ = add_scene_monitors(*simulation_, scene_);
-    if (auto failure = injected_failure()) simulation_->loop().add_monitor(failure);
     writers_ = add_scene_writers(*simulation_, scene_, folder_);
-    writers_.push_back(std::make_shared<ProgressWriter>(progress, interrupted));
-    simulation_->loop().add_monitor(writers_.back());
+    for (const auto& observer : observers) {
+      simulation_->loop().add_monitor(observer);
+      if (auto writer = std::dynamic_pointer_cast<OutputWriter>(observer)) writers_.push_back(writer);
+    }
     setup_time_ = seconds_since(setup_start);
     summary_["backend"] = simulation_->system().backend();
     log().info("setup {:.2f} s; critical time step {:.4g} s", setup_time_,
@@ -59,8 +58,8 @@ int SceneRun::run(bool progress, const std::atomic<bool>& interrupted) {
     simulation_->loop().run();
   } catch (const InstabilityError& e) {
     return unstable(e);
-  } catch (const Interrupted&) {
-    return finish_without_result("interrupted", seconds_since(solve_start_), "");
+  } catch (const RunStopped& e) {
+    return finish_without_result(e.status, seconds_since(solve_start_), "");
   } catch (const InputError& e) {
     const InputError located = locate_problems(e, scene_.document);
     finish_without_result("invalid_input", 0.0, located.what());
@@ -87,9 +86,10 @@ int SceneRun::unstable(const InstabilityError& e) {
   const bool inverted = e.diagnostic().what == "inverted_material";
   std::vector<CellField> folds;
   if (folded_ && !folded_->per_tet.empty()) folds.push_back({"folded", 1, folded_->per_tet});
-  write_state(folder_, "last_good_state.vtu", simulation_->system().force_kernel(),
-              inverted ? simulation_->system().previous_displacement() : simulation_->system().displacement(),
-              scene_.section("output"), false, folds);
+  written_displacement_ =
+      write_state(folder_, "last_good_state.vtu", simulation_->system().force_kernel(),
+                  inverted ? simulation_->system().previous_displacement() : simulation_->system().displacement(),
+                  scene_.section("output"), false, folds);
   // An inverted point beside the needle: where, against the needle, and what the scene can still do about it.
   Diagnostic diagnostic = e.diagnostic();
   const auto needle =
@@ -108,9 +108,10 @@ int SceneRun::finish_without_result(const std::string& status, double solve_time
   summary_["status"] = status;
   if (!error.empty()) summary_["error"] = error;
   summary_.write();
-  if (status == "interrupted")
-    log().error("interrupted at step {}; {} says so", simulation_ ? simulation_->system().step() : 0,
-                (folder_.path() / "summary.json").string());
+  // Asked for (a callback's "stop") is no error; Ctrl-C ends a run the user expected to finish.
+  if (status == "interrupted" || status == "stopped")
+    log().log(status == "stopped" ? spdlog::level::info : spdlog::level::err, "{} at step {}; {} says so", status,
+              simulation_ ? simulation_->system().step() : 0, (folder_.path() / "summary.json").string());
   return 1;
 }
 
@@ -146,8 +147,8 @@ void SceneRun::write_displacement_field() const {
 // result.vtu (and the displacement field the output section asks for), then summary.json with status "ok": the
 // needle, the reactions and the error indicators.
 int SceneRun::succeeded(double solve_time) {
-  const auto u = write_state(folder_, "result.vtu", simulation_->system().force_kernel(),
-                             simulation_->system().displacement(), scene_.section("output"), true);
+  written_displacement_ = write_state(folder_, "result.vtu", simulation_->system().force_kernel(),
+                                      simulation_->system().displacement(), scene_.section("output"), true);
   try {
     write_displacement_field();
   } catch (const InputError& e) {
@@ -155,7 +156,7 @@ int SceneRun::succeeded(double solve_time) {
     throw;
   }
   record(solve_time);
-  summary_.record_result(*simulation_, u);
+  summary_.record_result(*simulation_, written_displacement_);
   summary_["error_indicators"] = error_indicators(*simulation_);
   summary_["status"] = "ok";
   summary_.write();

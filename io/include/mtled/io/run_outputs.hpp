@@ -106,6 +106,7 @@ class RunSummary {
  public:
   RunSummary(const OutputFolder& folder, json header);
   json& operator[](const std::string& key) { return summary_[key]; }
+  const json& contents() const { return summary_; }
   void write() const;
   // What every outcome records: the times (s), the peak memory, the plugins loaded.
   void record_resources(const PluginCatalog& catalog, double setup_time, double solve_time, double wall_time);
