@@ -19,6 +19,19 @@ test -f "$work/plugin-build/mtled-material-mooney_rivlin.so"
 mtled="$work/install/bin/mtled"
 "$mtled" plugins --plugin-path "$work/plugin-build" --describe mooney_rivlin | grep -q '`c10`'
 "$mtled" run "$example/cube.json" --plugin-path "$work/plugin-build" -o "$work/out"
+# The installed Python module (when the build made one) runs the same scene in-process from the prefix alone, with
+# the same plugins found the same way: the same result.vtu, byte for byte.
+package=$(ls -d "$work"/install/lib/python3*/dist-packages 2>/dev/null || true)
+if [ -n "$package" ]; then
+  PYTHONPATH="$package" /usr/bin/python3 - "$example/cube.json" "$work/plugin-build" "$work/python" <<'PY'
+import sys
+import mtled
+assert "/install/lib/" in mtled.__file__, mtled.__file__  # the installed package, not the build tree's
+run = mtled.run(mtled.Scene.load(sys.argv[1]), sys.argv[3], plugin_paths=[sys.argv[2]])
+assert run.status == "ok" and "mtled-material-mooney_rivlin.so" in run.summary["plugins_loaded"], run.summary
+PY
+  cmp "$work/out/result.vtu" "$work/python/result.vtu"
+fi
 
 # The run is physically right: the nominal stress on the top face equals the homogeneous uniaxial solution of
 # the Mooney-Rivlin energy (the lateral stretch found by bisection on a zero lateral stress; derivatives of W

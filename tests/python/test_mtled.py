@@ -1,0 +1,203 @@
+"""The Python module against the command line: the same scene gives the same files to the last bit, callbacks see the
+steps asked for and can stop a run, arrays are views of mtled's memory, and errors come back as exceptions.
+Run by ctest (tests/python/CMakeLists.txt) with PYTHONPATH at the build tree's package."""
+import json
+import os
+import signal
+import subprocess
+from pathlib import Path
+
+import numpy
+import pytest
+
+import mtled
+
+SOURCE = Path(os.environ["MTLED_SOURCE_DIR"])
+EXECUTABLE = os.environ["MTLED_EXECUTABLE"]
+SCENES = SOURCE / "share" / "scenes"
+
+
+def small_needle(deformation_coefficient=0.4):
+    """The paper's small sample, coarse and short: 3 mm of insertion over 150 load steps."""
+    scene = json.loads((SCENES / "needle_small_sample.json").read_text())
+    scene["mesh"]["target_nodes"] = 1500
+    scene["needle"]["depth"] = 0.003
+    scene["needle"]["deformation_coefficient"] = deformation_coefficient
+    scene["integrator"]["load_steps"] = 150
+    return scene
+
+
+def cli_run(scene: dict, folder: Path, threads: int) -> Path:
+    """The same scene through `mtled run`, from a file."""
+    folder.mkdir(parents=True)
+    file = folder / "scene.json"
+    file.write_text(json.dumps(scene, indent=2))
+    subprocess.run([EXECUTABLE, "run", str(file), "-o", str(folder / "out"), "--threads", str(threads),
+                    "--no-progress", "--log-level", "warn"], check=True)
+    return folder / "out"
+
+
+def vtu_displacement(file: Path) -> numpy.ndarray:
+    """result.vtu's displacement as VTK (an independent reader) reads it."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader
+    reader = vtkXMLUnstructuredGridReader()
+    reader.SetFileName(str(file))
+    reader.Update()
+    return vtk_to_numpy(reader.GetOutput().GetPointData().GetArray("displacement"))
+
+
+def same_files(a: Path, b: Path, names=("result.vtu", "needle.csv", "reactions.csv")):
+    for name in names:
+        assert (a / name).read_bytes() == (b / name).read_bytes(), name
+
+
+def test_a_scene_from_a_dict_runs_as_the_command_line_runs_its_file(tmp_path):
+    scene = small_needle()
+    run = mtled.run(mtled.Scene(scene, directory=SCENES), tmp_path / "python", threads=2)
+    cli = cli_run(scene, tmp_path / "cli", threads=2)
+    assert run.status == "ok"
+    same_files(run.folder, cli)
+    numpy.testing.assert_array_equal(run.displacement, vtu_displacement(cli / "result.vtu"))
+    summary = json.loads((cli / "summary.json").read_text())
+    assert run.summary["steps"] == summary["steps"]
+    assert run.summary["needle"] == summary["needle"]
+    assert run.needle["depth"][-1] == pytest.approx(0.003, rel=1e-9)
+    assert run.needle["force"][-1] == pytest.approx(summary["needle"]["final_force_N"], rel=1e-9)  # 10 digits
+
+
+def test_a_set_value_runs_as_the_command_lines_set(tmp_path):
+    scene = mtled.Scene(small_needle(), directory=SCENES).set("/needle/deformation_coefficient", 0.25)
+    run = mtled.run(scene, tmp_path / "python", threads=1)
+    cli = cli_run(small_needle(0.25), tmp_path / "cli", threads=1)
+    same_files(run.folder, cli)
+    assert run.summary["overrides"] == ["/needle/deformation_coefficient=0.25"]
+
+
+def test_a_callback_sees_every_kth_step_and_can_stop_the_run(tmp_path):
+    seen = []
+
+    def record(step):
+        seen.append((step.step, step.load_fraction, step.needle["depth"], step.displacement.shape))
+        assert not step.displacement.flags.writeable
+
+    run = mtled.run(mtled.Scene(small_needle(), directory=SCENES), tmp_path / "all", threads=2, every=7,
+                    callback=record)
+    steps = run.summary["steps"]
+    assert [s for s, *_ in seen] == list(range(7, steps + 1, 7))
+    assert all(shape == run.nodes.shape for *_, shape in seen)
+    # The needle advances with the load: depth = load fraction x 3 mm while it is being inserted.
+    step, fraction, depth, _ = seen[5]
+    assert depth == pytest.approx(0.003 * fraction, rel=1e-9, abs=1e-12)
+
+    stopped = mtled.run(mtled.Scene(small_needle(), directory=SCENES), tmp_path / "stopped", threads=2, every=7,
+                        callback=lambda step: step.step < 21)
+    assert stopped.status == "stopped"
+    assert stopped.summary["steps"] == 21
+    assert json.loads((tmp_path / "stopped" / "summary.json").read_text())["status"] == "stopped"
+    assert not (tmp_path / "stopped" / "result.vtu").exists()
+
+
+def test_an_exception_in_the_callback_comes_back_as_it_was(tmp_path):
+    def fail(step):
+        raise LookupError(f"no such thing at step {step.step}")
+
+    with pytest.raises(LookupError, match="no such thing at step 10"):
+        mtled.run(mtled.Scene(small_needle(), directory=SCENES), tmp_path, threads=1, every=10, callback=fail)
+    assert json.loads((tmp_path / "summary.json").read_text())["status"] == "failed"
+
+
+def test_ctrl_c_stops_the_run_cleanly(tmp_path):
+    def press_ctrl_c(step):
+        os.kill(os.getpid(), signal.SIGINT)
+
+    with pytest.raises(KeyboardInterrupt):
+        mtled.run(mtled.Scene(small_needle(), directory=SCENES), tmp_path, threads=1, every=10,
+                  callback=press_ctrl_c)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["status"] == "interrupted"
+    assert summary["steps"] == 11  # the step after the one whose callback pressed it
+    assert not (tmp_path / "result.vtu").exists()
+
+
+def test_the_arrays_are_read_only_views_of_mtleds_memory(tmp_path):
+    run = mtled.run(mtled.Scene(small_needle(), directory=SCENES), tmp_path, threads=2)
+    for array in (run.nodes, run.displacement, run.reactions["bottom"]):
+        assert not array.flags.writeable and not array.flags.owndata
+        with pytest.raises(ValueError):
+            array[0, 0] = 1.0
+    # Two reads are two views of one buffer: nothing was copied.
+    assert run.displacement.__array_interface__["data"][0] == run.displacement.__array_interface__["data"][0]
+    assert numpy.shares_memory(run.displacement, run.displacement)
+    # Relaxed to equilibrium, the fixed bottom holds what the needle pushes.
+    assert abs(run.reactions["bottom"].sum(axis=0)[2]) == pytest.approx(abs(run.needle["force"][-1]), rel=0.05)
+    # A view outlives the Run object it came from.
+    u = run.displacement
+    expected = numpy.array(u)
+    del run
+    numpy.testing.assert_array_equal(u, expected)
+
+
+def test_bad_input_raises_input_error_naming_the_pointer_and_line(tmp_path):
+    scene = small_needle()
+    scene["materials"][0]["mu"] = -722
+    text = json.dumps(scene, indent=2).splitlines()
+    line = next(i for i, row in enumerate(text, 1) if '"mu": -722' in row)
+    with pytest.raises(mtled.InputError) as raised:
+        mtled.run(mtled.Scene(scene, directory=SCENES), tmp_path / "out")
+    assert raised.value.pointer == "/materials/0/mu"
+    assert raised.value.line == line
+    assert not (tmp_path / "out").exists()
+    problems = mtled.Scene(scene, directory=SCENES).validate()
+    assert [(p.pointer, p.line) for p in problems] == [("/materials/0/mu", line)]
+    assert mtled.Scene(small_needle(), directory=SCENES).validate() == []
+    problems = mtled.Scene(small_needle(), directory=SCENES).set("/needle/deformation_coefficient", 1.5).validate()
+    assert [(p.file, p.pointer) for p in problems] == [(None, "/needle/deformation_coefficient")]
+
+
+def test_an_unstable_run_raises_instability_error_with_the_last_good_state(tmp_path):
+    scene = json.loads((SCENES / "uniaxial_cube_neohookean.json").read_text())
+    scene["mesh"]["target_nodes"] = 300
+    scene["integrator"]["time_step_factor"] = 10.0
+    scene["monitors"] = {"stable_step": "stop"}
+    with pytest.raises(mtled.InstabilityError) as raised:
+        mtled.run(mtled.Scene(scene, directory=SCENES), tmp_path, threads=1)
+    error = raised.value
+    assert error.diagnostic["what"] == "time_step_above_stable"
+    assert error.last_good_state.shape == error.run.nodes.shape
+    assert numpy.isfinite(error.last_good_state).all()
+    assert (tmp_path / "last_good_state.vtu").exists() and not (tmp_path / "result.vtu").exists()
+
+
+def test_two_runs_at_once_give_the_answers_of_two_command_line_runs(tmp_path):
+    coefficients = (0.3, 0.5)
+    runs = mtled.run_many([mtled.Scene(small_needle(c), directory=SCENES) for c in coefficients],
+                          tmp_path / "python", threads=2)
+    assert [r.folder.name for r in runs] == ["run-0", "run-1"]
+    for run, c in zip(runs, coefficients):
+        same_files(run.folder, cli_run(small_needle(c), tmp_path / f"cli-{c}", threads=1))
+    comparison = mtled.compare(runs[0], runs[1])
+    assert max(comparison["nrmse"].values()) > 0.0  # C_D changes the field
+
+
+def test_compare_of_a_run_with_itself_is_zero(tmp_path):
+    run = mtled.run(mtled.Scene(small_needle(), directory=SCENES), tmp_path, threads=2)
+    assert mtled.compare(run, run.folder / "result.vtu")["nrmse"] == {"ux": 0.0, "uy": 0.0, "uz": 0.0}
+
+
+def test_a_study_from_python_runs_mtled_for_each_configuration(tmp_path):
+    """mtled.study starts each run as a child `mtled run` (the build tree's, not this Python), and its report is the
+    study.json the command writes: the Ogden cube's top-face force against its exact value."""
+    study = {"scene": str(SCENES / "uniaxial_cube_ogden.json"), "threads": 1, "metric": "force_error",
+             "reference": {"exact_force": {"set": "top", "component": "z", "value": -0.0649565091}},
+             "configurations": [{"label": f"nodes={n}", "set": {"/mesh/target_nodes": n}} for n in (300, 600)]}
+    file = tmp_path / "study.json"
+    file.write_text(json.dumps(study))
+    report = mtled.study(file, tmp_path / "out")
+    rows = report["configurations"]
+    assert [r["status"] for r in rows] == ["ok", "ok"]
+    # The consistent (VCI) integration of the shipped scene keeps the coarse cubes within 1% of the exact force
+    # (docs/validation.md).
+    assert all(r["error"] < 0.01 for r in rows), [r["error"] for r in rows]
+    summary = json.loads((tmp_path / "out" / "runs" / "nodes=300" / "summary.json").read_text())
+    assert summary["mtled_version"] == mtled.__version__
