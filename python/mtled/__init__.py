@@ -189,10 +189,10 @@ def compare(a, b, plugin_paths=()) -> dict:
     return _mtled.compare(_folder(a), _folder(b), [Path(p) for p in plugin_paths])
 
 
-def _report(code: int, folder: Path, report: str, command: str) -> dict:
+def _report(code: int, folder: Path, report: Optional[str], command: str) -> Optional[dict]:
     if code != 0:
         raise Error(f"mtled {command} ended with exit code {code}; its log is above and its files in {folder}")
-    return json.loads((folder / report).read_text())
+    return None if report is None else json.loads((folder / report).read_text())
 
 
 def study(path, output, threads: int = 0, reuse: bool = False, log_level: str = "warn", plugin_paths=()) -> dict:
@@ -203,10 +203,18 @@ def study(path, output, threads: int = 0, reuse: bool = False, log_level: str = 
     return _report(_mtled.study(options), Path(output), "study.json", "study")
 
 
-def fit(path, output, overrides=(), threads: int = 0, log_level: str = "warn", plugin_paths=()) -> dict:
-    """`mtled fit` (each forward run a child `mtled run`): the report, fit.json, as a dict."""
+def fit(path, output, overrides=(), threads: int = 0, synthesize: Optional[int] = None, log_level: str = "warn",
+        plugin_paths=()) -> dict:
+    """`mtled fit` (each forward run a child `mtled run`): the report, fit.json, as a dict. `overrides` are --set's
+    "/pointer=value" on the fit file. `synthesize=SEED` fits nothing: it makes data from the model at the start values
+    with noise from that seed, as `--synthesize SEED` does, and returns {"data": [the files in output/data]}."""
     options = _mtled.FitOptions()
     options.fit, options.output, options.overrides, options.threads = Path(path), Path(output), list(overrides), threads
-    options.log_level, options.plugin_paths = log_level, [Path(p) for p in plugin_paths]
-    return _report(_mtled.fit(options), Path(output), "fit.json", "fit")
+    options.synthesize, options.log_level = synthesize, log_level
+    options.plugin_paths = [Path(p) for p in plugin_paths]
+    code = _mtled.fit(options)
+    if synthesize is not None:
+        _report(code, Path(output), None, "fit --synthesize")
+        return {"data": sorted(str(f) for f in (Path(output) / "data").iterdir())}
+    return _report(code, Path(output), "fit.json", "fit")
 

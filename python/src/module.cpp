@@ -206,6 +206,7 @@ void bind_studies(py::module_& m) {
       .def_readwrite("overrides", &app::FitOptions::overrides)
       .def_readwrite("threads", &app::FitOptions::threads)
       .def_readwrite("plugin_paths", &app::FitOptions::plugin_paths)
+      .def_readwrite("synthesize", &app::FitOptions::synthesize)
       .def_readwrite("log_level", &app::FitOptions::log_level);
   m.def(
       "study",
