@@ -228,3 +228,12 @@ def test_a_fit_from_python_recovers_ogdens_mu_from_a_compression_curve(tmp_path)
     [mu] = report["parameters"]
     assert report["status"] == "converged", report
     assert abs(mu["value"] - 722.0) < 0.02 * 722.0, mu
+
+
+def test_a_scene_loaded_by_a_relative_path_runs_after_the_script_changes_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(SOURCE)
+    scene = mtled.Scene.load("share/scenes/uniaxial_cube_neohookean.json").set("/mesh/target_nodes", 300)
+    monkeypatch.chdir(tmp_path)
+    run = mtled.run(scene, "out", threads=1)
+    assert run.summary["scene"] == str(SCENES / "uniaxial_cube_neohookean.json")
+    assert (tmp_path / "out" / "result.vtu").exists()

@@ -45,4 +45,4 @@ def test_the_readmes_example_runs(tmp_path, monkeypatch):
         exec(compile(block, "README.md", "exec"), {})
     force, shape = printed.getvalue().split(" ", 1)
     assert float(force) > 0.0
-    assert shape.strip() == "(7480, 3)" or re.fullmatch(r"\(\d+, 3\)", shape.strip())
+    assert re.fullmatch(r"\(\d+, 3\)", shape.strip()), shape  # (nodes, 3)
