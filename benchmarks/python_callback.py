@@ -2,9 +2,9 @@
 """A scene run from Python with a callback at every step that reads the needle's force: the worst case of the Python
 module's overhead, timed against `mtled run` on the same scene (docs/python.md, Speed):
 
-    farm-bench -n 7 --vs "build/bin/mtled run share/scenes/needle_small_sample.json -o /tmp/cli --threads 2 \\
-        --log-level warn --no-progress" -- env PYTHONPATH=build/python /usr/bin/python3 \\
-        benchmarks/python_callback.py share/scenes/needle_small_sample.json /tmp/python
+    hyperfine -w 1 -r 11 \\
+      'env PYTHONPATH=build/python /usr/bin/python3 benchmarks/python_callback.py share/scenes/needle_small_sample.json /tmp/python' \\
+      'build/bin/mtled run share/scenes/needle_small_sample.json -o /tmp/cli --threads 2 --log-level warn --no-progress'
 
 Usage: python_callback.py SCENE OUTPUT [THREADS]
 """
