@@ -197,10 +197,8 @@ def _report(code: int, folder: Path, report: Optional[str], command: str) -> Opt
 
 def study(path, output, threads: int = 0, reuse: bool = False, log_level: str = "warn", plugin_paths=()) -> dict:
     """`mtled study` (each run a child `mtled run`): the report, study.json, as a dict."""
-    options = _mtled.StudyOptions()
-    options.study, options.output, options.threads, options.reuse = Path(path), Path(output), threads, reuse
-    options.log_level, options.plugin_paths = log_level, [Path(p) for p in plugin_paths]
-    return _report(_mtled.study(options), Path(output), "study.json", "study")
+    code = _mtled.study(Path(path), Path(output), threads, reuse, [Path(p) for p in plugin_paths], log_level)
+    return _report(code, Path(output), "study.json", "study")
 
 
 def fit(path, output, overrides=(), threads: int = 0, synthesize: Optional[int] = None, log_level: str = "warn",
@@ -208,11 +206,8 @@ def fit(path, output, overrides=(), threads: int = 0, synthesize: Optional[int] 
     """`mtled fit` (each forward run a child `mtled run`): the report, fit.json, as a dict. `overrides` are --set's
     "/pointer=value" on the fit file. `synthesize=SEED` fits nothing: it makes data from the model at the start values
     with noise from that seed, as `--synthesize SEED` does, and returns {"data": [the files in output/data]}."""
-    options = _mtled.FitOptions()
-    options.fit, options.output, options.overrides, options.threads = Path(path), Path(output), list(overrides), threads
-    options.synthesize, options.log_level = synthesize, log_level
-    options.plugin_paths = [Path(p) for p in plugin_paths]
-    code = _mtled.fit(options)
+    code = _mtled.fit(Path(path), Path(output), list(overrides), threads, synthesize, [Path(p) for p in plugin_paths],
+                      log_level)
     if synthesize is not None:
         _report(code, Path(output), None, "fit --synthesize")
         return {"data": sorted(str(f) for f in (Path(output) / "data").iterdir())}

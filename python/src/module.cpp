@@ -66,6 +66,13 @@ py::array rows_of_three(const std::vector<Vec3>& points, py::handle owner) {
 
 py::object from_json(const json& value) { return py::module_::import("json").attr("loads")(value.dump()); }
 
+// Problems as Python sees them: (where, message) pairs, which mtled.errors locates.
+std::vector<std::pair<std::string, std::string>> where_and_message(const std::vector<Problem>& problems) {
+  std::vector<std::pair<std::string, std::string>> pairs;
+  for (const Problem& p : problems) pairs.emplace_back(p.where, p.message);
+  return pairs;
+}
+
 // The user's callback after every `every`-th step: it sees the step, the time, the load fraction, the needle and the
 // displacement (a view valid during the call); returning False stops the run ("stopped"). An exception it raises ends
 // the run ("failed") and is raised again, as it was, once the run has recorded that.
@@ -161,9 +168,7 @@ void bind_scene(py::module_& m) {
       .def_property_readonly("json", [](const SceneText& scene) { return scene.document.root.dump(); })
       .def_property_readonly("name", [](const SceneText& scene) { return scene.document.name; })
       .def("problems", [](const SceneText& scene, const std::vector<fs::path>& plugin_paths) {
-        std::vector<std::pair<std::string, std::string>> problems;
-        for (const Problem& p : scene_problems(scene.document, plugin_paths)) problems.emplace_back(p.where, p.message);
-        return problems;
+        return where_and_message(scene_problems(scene.document, plugin_paths));
       });
 }
 
@@ -191,37 +196,38 @@ void bind_run(py::module_& m) {
 
 // mtled study and mtled fit as the command line runs them (each run a child `mtled run`); the exit code.
 void bind_studies(py::module_& m) {
-  py::class_<app::StudyOptions>(m, "StudyOptions")
-      .def(py::init<>())
-      .def_readwrite("study", &app::StudyOptions::study)
-      .def_readwrite("output", &app::StudyOptions::output)
-      .def_readwrite("threads", &app::StudyOptions::threads)
-      .def_readwrite("reuse", &app::StudyOptions::reuse)
-      .def_readwrite("plugin_paths", &app::StudyOptions::plugin_paths)
-      .def_readwrite("log_level", &app::StudyOptions::log_level);
-  py::class_<app::FitOptions>(m, "FitOptions")
-      .def(py::init<>())
-      .def_readwrite("fit", &app::FitOptions::fit)
-      .def_readwrite("output", &app::FitOptions::output)
-      .def_readwrite("overrides", &app::FitOptions::overrides)
-      .def_readwrite("threads", &app::FitOptions::threads)
-      .def_readwrite("plugin_paths", &app::FitOptions::plugin_paths)
-      .def_readwrite("synthesize", &app::FitOptions::synthesize)
-      .def_readwrite("log_level", &app::FitOptions::log_level);
   m.def(
       "study",
-      [](app::StudyOptions options) {
+      [](const fs::path& study, const fs::path& output, int threads, bool reuse,
+         const std::vector<fs::path>& plugin_paths, const std::string& log_level) {
+        app::StudyOptions options;
+        options.study = study;
+        options.output = output;
+        options.threads = threads;
+        options.reuse = reuse;
+        options.plugin_paths = plugin_paths;
+        options.log_level = log_level;
         const py::gil_scoped_release released;
         return app::study_command(options);
       },
-      "options"_a);
+      "study"_a, "output"_a, "threads"_a, "reuse"_a, "plugin_paths"_a, "log_level"_a);
   m.def(
       "fit",
-      [](app::FitOptions options) {
+      [](const fs::path& fit, const fs::path& output, const std::vector<std::string>& overrides, int threads,
+         std::optional<unsigned long long> synthesize, const std::vector<fs::path>& plugin_paths,
+         const std::string& log_level) {
+        app::FitOptions options;
+        options.fit = fit;
+        options.output = output;
+        options.overrides = overrides;
+        options.threads = threads;
+        options.synthesize = synthesize;
+        options.plugin_paths = plugin_paths;
+        options.log_level = log_level;
         const py::gil_scoped_release released;
         return app::fit_command(options);
       },
-      "options"_a);
+      "fit"_a, "output"_a, "overrides"_a, "threads"_a, "synthesize"_a, "plugin_paths"_a, "log_level"_a);
 }
 
 }  // namespace
@@ -237,9 +243,8 @@ PYBIND11_MODULE(_mtled, m) {
     try {
       if (raised) std::rethrow_exception(raised);
     } catch (const InputError& e) {
-      std::vector<std::pair<std::string, std::string>> problems;
-      for (const Problem& p : e.problems()) problems.emplace_back(p.where, p.message);
-      const py::object error = py::module_::import("mtled.errors").attr("InputError")(e.what(), problems);
+      const py::object error =
+          py::module_::import("mtled.errors").attr("InputError")(e.what(), python::where_and_message(e.problems()));
       PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(error.ptr())), error.ptr());
     }
   });
