@@ -1,5 +1,6 @@
-// A fit's forward runs and searches. Every forward run is a child `mtled run` of an experiment's scene with the
-// parameters' values set by pointer, so a run that goes unstable is recorded as a bad point and the search goes on.
+// A fit's forward runs and searches. Every forward run is an `mtled run` of an experiment's scene with the parameters'
+// values set by pointer, in this process or (through a launcher) a child process; a run that goes unstable is recorded
+// as a bad point and the search goes on.
 // Runs go several at once (a Jacobian's columns, the start points' searches), the threads split between them.
 // Levenberg-Marquardt works on forward-difference Jacobians with the bounds kept by fixing a parameter at its bound
 // while the gradient pushes it out; BOBYQA (NLopt) is bounded and derivative-free. Both search the unit interval of
@@ -40,12 +41,13 @@ using Clock = std::chrono::steady_clock;
 }  // namespace
 
 Evaluator::Evaluator(const Plan& plan, const fs::path& output, const std::vector<fs::path>& plugin_paths,
-                     std::string log_level, fs::path executable)
+                     std::string log_level, InProcessRunner in_process, fs::path executable)
     : plan_(plan),
       output_(output),
       executable_(executable.empty() ? mtled_program("mtled") : std::move(executable)),
       plugin_paths_(plugin_paths),
       log_level_(std::move(log_level)),
+      in_process_(plan.settings.launcher.empty() ? std::move(in_process) : InProcessRunner{}),
       catalog_(std::make_unique<PluginCatalog>(plugin_search_path(plugin_paths, {}))) {
   const int threads = plan.settings.threads > 0 ? plan.settings.threads
                                                 : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
@@ -75,28 +77,21 @@ std::vector<Evaluation> Evaluator::evaluate(const std::vector<std::vector<double
       history_.push_back(out[p]);  // its place; filled in when it is finished
     }
   }
-  // One job per point and experiment, at most at_once_ child runs at a time over every caller.
+  // One job per point and experiment, at most at_once_ runs at a time over every caller.
   const std::size_t experiments = plan_.experiments.size();
   std::vector<RunOutcome> outcomes(points.size() * experiments);
   std::vector<std::thread> jobs;
   // A batch smaller than the runs allowed at once gives each run more threads (a trial point gets them all); a
   // launched run has its own machine's threads.
-  const std::vector<std::string>& launcher = plan_.settings.launcher;
-  const int threads = launcher.empty() ? std::max(1, threads_ / std::min(at_once_, static_cast<int>(outcomes.size())))
-                                       : threads_;
+  const int threads = plan_.settings.launcher.empty()
+                          ? std::max(1, threads_ / std::min(at_once_, static_cast<int>(outcomes.size())))
+                          : threads_;
   for (std::size_t j = 0; j < outcomes.size(); ++j)
     jobs.emplace_back([&, j] {
-      const Evaluation& e = out[j / experiments];
-      const fs::path folder = e.folder / plan_.experiments[j % experiments].name;
-      std::vector<std::string> args = arguments(e, j % experiments, folder, threads);
-      fs::create_directories(folder);
-      if (!launcher.empty()) {
-        args.insert(args.begin(), executable_.string());
-        args.insert(args.begin(), launcher.begin() + 1, launcher.end());
-      }
+      const ForwardRun forward = forward_run(out[j / experiments], j % experiments, threads);
+      fs::create_directories(forward.folder);
       slots_->acquire();
-      outcomes[j] = run_child(launcher.empty() ? executable_ : fs::path(launcher.front()), args, folder / "mtled.log",
-                              plan_.settings.timeout_s);
+      outcomes[j] = run(forward);
       slots_->release();
     });
   for (auto& t : jobs) t.join();
@@ -107,25 +102,34 @@ std::vector<Evaluation> Evaluator::evaluate(const std::vector<std::vector<double
   return out;
 }
 
-// `mtled run` of experiment x at the evaluation's values: the experiment's own overrides, the mesh written once,
-// then the parameters.
-std::vector<std::string> Evaluator::arguments(const Evaluation& e, std::size_t x, const fs::path& folder,
-                                              int threads) const {
+// Experiment x at the evaluation's values: the experiment's own overrides, the mesh written once, then the parameters.
+ForwardRun Evaluator::forward_run(const Evaluation& e, std::size_t x, int threads) const {
   const Experiment& experiment = plan_.experiments[x];
-  std::vector<std::string> args{
-      "run",       experiment.scene.string(), "-o", folder.string(), "--no-progress", "--log-level", log_level_,
-      "--threads", std::to_string(threads)};
-  for (const auto& [pointer, value] : experiment.set.items())
-    args.insert(args.end(), {"--set", pointer + "=" + value.dump()});
+  ForwardRun run{experiment.scene, {}, e.folder / experiment.name, threads, {}, log_level_, plan_.settings.timeout_s};
+  for (const auto& [pointer, value] : experiment.set.items()) run.assignments.push_back(pointer + "=" + value.dump());
   if (!experiment.mesh_file.empty())
-    args.insert(args.end(),
-                {"--set", "/mesh=" + json{{"type", "abaqus_file"}, {"path", experiment.mesh_file.string()}}.dump()});
+    run.assignments.push_back("/mesh=" + json{{"type", "abaqus_file"}, {"path", experiment.mesh_file.string()}}.dump());
   for (std::size_t k = 0; k < plan_.parameters.size(); ++k) {
     const std::string& pointer = plan_.parameters[k].pointers[x];
-    if (!pointer.empty()) args.insert(args.end(), {"--set", fmt::format("{}={:.17g}", pointer, e.values[k])});
+    if (!pointer.empty()) run.assignments.push_back(fmt::format("{}={:.17g}", pointer, e.values[k]));
   }
-  for (const auto& p : plugin_paths_) args.insert(args.end(), {"--plugin-path", fs::absolute(p).string()});
-  return args;
+  for (const auto& p : plugin_paths_) run.plugin_paths.push_back(fs::absolute(p));
+  return run;
+}
+
+// In this process when there is a runner for it, else a child `mtled run` (behind the launcher, if any).
+RunOutcome Evaluator::run(const ForwardRun& run) const {
+  if (in_process_) return in_process_(run);
+  std::vector<std::string> args{
+      "run",         run.scene.string(), "-o",        run.folder.string(),        "--no-progress",
+      "--log-level", run.log_level,      "--threads", std::to_string(run.threads)};
+  for (const auto& assignment : run.assignments) args.insert(args.end(), {"--set", assignment});
+  for (const auto& p : run.plugin_paths) args.insert(args.end(), {"--plugin-path", p.string()});
+  const std::vector<std::string>& launcher = plan_.settings.launcher;
+  if (launcher.empty()) return run_child(executable_, args, run.folder / "mtled.log", run.timeout_s);
+  args.insert(args.begin(), executable_.string());
+  args.insert(args.begin(), launcher.begin() + 1, launcher.end());
+  return run_child(fs::path(launcher.front()), args, run.folder / "mtled.log", run.timeout_s);
 }
 
 // The evaluation's predictions and weighted residuals from its runs' folders; a run that failed makes it a bad point

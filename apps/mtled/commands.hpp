@@ -71,7 +71,7 @@ struct FitOptions {
   std::filesystem::path output;  // the fit's folder
   std::vector<std::string> overrides;  // --set on the fit file
   int threads = 0;               // in all, split between the runs that go at once (0: the fit file's, else all)
-  bool reuse_mesh = true;        // write each experiment's mesh once and read it in every run
+  bool reuse_mesh = true;        // each experiment's mesh written once, its meshless basis built once
   bool check = false;            // read and check everything, run nothing
   std::optional<unsigned long long> synthesize;  // write data from the model at the start values, with this seed
   std::vector<std::filesystem::path> plugin_paths;

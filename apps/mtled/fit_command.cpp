@@ -2,15 +2,70 @@
 // the file format in docs/calibration.md). Everything is checked before the first forward run; with --synthesize the
 // command writes data made by the model at the start values, with seeded noise, instead of fitting.
 #include <fmt/ranges.h>
+#include <omp.h>
 
 #include <iostream>
 
 #include "commands.hpp"
 #include "mtled/analysis/fit.hpp"
+#include "mtled/analysis/scene_sections.hpp"
 #include "mtled/io/output.hpp"
 #include "mtled/log.hpp"
+#include "scene_run.hpp"
 
 namespace mtled::app {
+
+namespace {
+
+// Ends a run that has gone on longer than its limit, as the timeout of a child run does.
+class WallClockLimit final : public StepMonitor {
+ public:
+  WallClockLimit(SceneRun::Clock::time_point start, double limit_s) : start_(start), limit_s_(limit_s) {}
+  std::string name() const override { return "wall_clock_limit"; }
+  void after_step(const StepRecord&) override {
+    if (std::chrono::duration<double>(SceneRun::Clock::now() - start_).count() > limit_s_)
+      throw RunStopped("timeout", fmt::format("still running after the fit's timeout_s, {:g} s", limit_s_));
+  }
+  bool reads_displacement(long) const override { return false; }
+
+ private:
+  SceneRun::Clock::time_point start_;
+  double limit_s_;
+};
+
+}  // namespace
+
+RunOutcome run_forward_in_process(const fit::ForwardRun& run, BasisCache& bases) {
+  const auto start = SceneRun::Clock::now();
+  RunOutcome outcome;
+  {
+    const ThreadLogFile log_file(run.folder / "mtled.log", run.log_level);
+    try {
+      SceneDocument document = read_scene(run.scene, run.assignments);
+      PluginCatalog catalog(plugin_search_path(run.plugin_paths, scene_plugin_paths(document)));
+      const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
+      RunOptions options;
+      options.scene = {run.scene, run.assignments, run.plugin_paths};
+      options.output = run.folder;
+      options.threads = run.threads;
+      options.progress = false;
+      omp_set_num_threads(run.threads);  // this thread's (the other runs' threads set their own)
+      SceneRun scene_run(options, scene, catalog, run.threads, start, &bases);
+      std::vector<std::shared_ptr<StepMonitor>> observers;
+      if (run.timeout_s > 0.0) observers.push_back(std::make_shared<WallClockLimit>(start, run.timeout_s));
+      outcome.exit_code = scene_run.run(observers);
+      outcome.timed_out = scene_run.summary().value("status", "") == "timeout";
+    } catch (const InputError& e) {
+      log().error("{}", e.what());
+      outcome.exit_code = 2;
+    } catch (const std::exception& e) {
+      log().error("{}", e.what());
+      outcome.exit_code = 1;
+    }
+  }
+  outcome.elapsed_s = std::chrono::duration<double>(SceneRun::Clock::now() - start).count();
+  return outcome;
+}
 
 int fit_command(const FitOptions& options) {
   fit::Plan plan = fit::read(options.fit, options.overrides, options.plugin_paths);
@@ -24,7 +79,14 @@ int fit_command(const FitOptions& options) {
   if (!options.synthesize) fit::check_measured(plan);  // a template for --synthesize may lack measured values
   const double mesh_seconds =
       options.reuse_mesh ? fit::write_meshes_once(plan, out.path(), options.plugin_paths) : 0.0;
-  fit::Evaluator evaluator(plan, out.path(), options.plugin_paths, options.log_level);
+  // The forward runs go in this process, each experiment's meshless basis built by its first run (a launcher sends
+  // them elsewhere instead, as child processes).
+  BasisCache bases;
+  fit::InProcessRunner in_process = [&bases, reuse = options.reuse_mesh](const fit::ForwardRun& run) {
+    BasisCache own;  // --no-mesh-reuse: each run builds its own
+    return run_forward_in_process(run, reuse ? bases : own);
+  };
+  fit::Evaluator evaluator(plan, out.path(), options.plugin_paths, options.log_level, in_process);
   std::size_t data = 0;
   for (const auto& e : plan.experiments) data += e.data.size();
   const std::vector<std::string>& launcher = plan.settings.launcher;

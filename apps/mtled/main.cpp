@@ -161,7 +161,8 @@ void add_analysis_commands(CLI::App& cli, Commands& c) {
   c.fit_cmd->add_option("--set", c.fit.overrides, "override a value of the fit file: /json/pointer=value (repeatable)");
   c.fit_cmd->add_option("--threads", c.fit.threads, "threads in all, split between the runs that go at once")
       ->check(CLI::NonNegativeNumber);
-  c.fit_cmd->add_flag("!--no-mesh-reuse", c.fit.reuse_mesh, "generate each run's mesh again instead of writing it once");
+  c.fit_cmd->add_flag("!--no-mesh-reuse", c.fit.reuse_mesh,
+                      "generate each run's mesh and build its meshless basis again instead of once");
   c.fit_cmd->add_flag("--check", c.fit.check, "check the fit file, its data files and every scene; run nothing");
   c.fit_cmd->add_option("--synthesize", c.fit.synthesize,
                         "write each data file again under OUTPUT/data from the model at the start values plus "

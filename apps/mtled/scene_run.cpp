@@ -27,10 +27,11 @@ OutputFolder cleared_output_folder(const RunOptions& options) {
 }  // namespace
 
 SceneRun::SceneRun(const RunOptions& options, const Scene& scene, PluginCatalog& catalog, int threads,
-                   Clock::time_point wall_start)
+                   Clock::time_point wall_start, BasisCache* bases)
     : wall_start_(wall_start),
       scene_(scene),
       catalog_(catalog),
+      bases_(bases),
       plugin_paths_(options.scene.plugin_paths),
       folder_(cleared_output_folder(options)),
       summary_(folder_, {{"mtled_version", MTLED_VERSION_STRING},
@@ -42,7 +43,7 @@ SceneRun::SceneRun(const RunOptions& options, const Scene& scene, PluginCatalog&
 int SceneRun::run(const std::vector<std::shared_ptr<StepMonitor>>& observers) {
   try {
     const auto setup_start = Clock::now();
-    simulation_ = std::make_unique<Simulation>(scene_, catalog_);
+    simulation_ = std::make_unique<Simulation>(scene_, catalog_, bases_);
     check_displacement_field();
     folded_ = add_scene_monitors(*simulation_, scene_);
     writers_ = add_scene_writers(*simulation_, scene_, folder_);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "mtled/analysis/fit.hpp"
 #include "mtled/io/run_outputs.hpp"
 #include "mtled/monitors/scene_monitors.hpp"
 
@@ -27,9 +28,10 @@ struct RunStopped : std::runtime_error {
 class SceneRun {
  public:
   using Clock = std::chrono::steady_clock;
-  // `wall_start`: before the scene was read; `threads`: the run's thread count, already set.
+  // `wall_start`: before the scene was read; `threads`: the run's thread count, already set; `bases`: the meshless
+  // bases runs of the same mesh share (MechanicalSystem; null: this run builds its own).
   SceneRun(const RunOptions& options, const Scene& scene, PluginCatalog& catalog, int threads,
-           Clock::time_point wall_start);
+           Clock::time_point wall_start, BasisCache* bases = nullptr);
 
   // The exit code: 0 with result.vtu, 1 stopped (RunStopped), 3 unstable (last_good_state.vtu). An invalid input is
   // rethrown at its scene line, any other failure as it came, each after summary.json recorded it. `observers` watch
@@ -56,6 +58,7 @@ class SceneRun {
   const Clock::time_point wall_start_;
   const Scene& scene_;
   PluginCatalog& catalog_;
+  BasisCache* const bases_;
   const std::vector<std::filesystem::path> plugin_paths_;
   const OutputFolder folder_;
   RunSummary summary_;
@@ -66,5 +69,10 @@ class SceneRun {
   std::vector<std::shared_ptr<OutputWriter>> writers_;
   std::vector<double> written_displacement_;
 };
+
+// A fit's forward run in this process, as a child `mtled run` does it: its log in its folder (mtled.log), stopped with
+// status "timeout" after run.timeout_s, the meshless basis of each mesh built once and shared through `bases`. How it
+// ended, exit_code as `mtled run`'s (2: invalid input).
+RunOutcome run_forward_in_process(const fit::ForwardRun& run, BasisCache& bases);
 
 }  // namespace mtled::app

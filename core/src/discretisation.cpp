@@ -113,94 +113,66 @@ std::vector<std::uint64_t> morton_keys(const TetMesh& mesh) {
   return key;
 }
 
-}  // namespace
-
-Discretisation::Discretisation(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
-                               std::vector<std::shared_ptr<const Material>> region_materials, Options options)
-    : mesh_(std::move(mesh)), shape_functions_(std::move(shape_functions)), materials_(std::move(region_materials)) {
-  if (materials_.size() != mesh_.region_names.size())
-    throw std::logic_error("Discretisation: one material per mesh region is required");
-  if (materials_.size() > std::numeric_limits<std::uint16_t>::max())
-    throw InputError(mesh_.source, "more than 65535 material regions");
-  cloud_.surface = surface_nodes(mesh_);
-  cloud_.spacing = mean_edge_length_at_nodes(mesh_);
-  const double dilatation = shape_functions_->support_dilatation();
-  cloud_.support_radius.resize(cloud_.spacing.size());
-  for (std::size_t i = 0; i < cloud_.spacing.size(); ++i) cloud_.support_radius[i] = dilatation * cloud_.spacing[i];
-  cloud_.max_support_radius = *std::max_element(cloud_.support_radius.begin(), cloud_.support_radius.end());
-  const auto [lo, hi] = bounding_box(mesh_.points);
-  cloud_.length_scale = (hi - lo).norm();
-  cloud_.search = std::make_unique<PointSearch>(mesh_.points);
-
-  build_integration_points(options.integration_points_per_tet, options.cell_groups);
-  build_supports(options.precision);
-  build_time_steps();
-  const std::size_t padded = 4 * (static_cast<std::size_t>(node_count()) + 1);
-  correction_.at_slots.assign(padded, 0.0);
-  correction_.means.assign(3 * static_cast<std::size_t>(points_.count()), 0.0);
-  if (options.consistent_integration) build_integration_correction();
-  team_ = std::make_unique<ThreadTeam>(options.threads > 0 ? options.threads : omp_get_max_threads());
-}
-
-Discretisation::~Discretisation() = default;
-
-void Discretisation::build_integration_points(int points_per_tet, const std::vector<int>& cell_groups) {
+void build_integration_points(MeshlessBasis& b, int points_per_tet, const std::vector<int>& cell_groups) {
   if (points_per_tet != 1 && points_per_tet != 4)
     throw InputError("/discretisation/integration_points_per_tet", "must be 1 or 4");
-  if (!cell_groups.empty() && cell_groups.size() != mesh_.tets.size())
+  if (!cell_groups.empty() && cell_groups.size() != b.mesh.tets.size())
     throw std::logic_error("Discretisation: one cell group per tet is required");
-  const std::size_t count = mesh_.tets.size() * static_cast<std::size_t>(points_per_tet);
-  points_.positions.reserve(count);
-  points_.weights.reserve(count);
-  points_.tets.reserve(count);
-  points_.material_index.reserve(count);
-  std::vector<Index> order(mesh_.tets.size());
+  const std::size_t count = b.mesh.tets.size() * static_cast<std::size_t>(points_per_tet);
+  b.points.positions.reserve(count);
+  b.points.weights.reserve(count);
+  b.points.tets.reserve(count);
+  b.points.material_index.reserve(count);
+  std::vector<Index> order(b.mesh.tets.size());
   std::iota(order.begin(), order.end(), Index{0});
   const int groups = cell_groups.empty() ? 1 : *std::max_element(cell_groups.begin(), cell_groups.end()) + 1;
-  points_.group_offsets.assign(static_cast<std::size_t>(groups) + 1, 0);
+  b.points.group_offsets.assign(static_cast<std::size_t>(groups) + 1, 0);
   // Integration points follow their cells along a Morton curve (within a cell group and a region, so a group stays
   // one range of points and a region's points form long one-material batches): consecutive points then share most
   // of their support nodes, and the force kernel finds their records in cache. The mesh generator's order scatters
   // them (the brain phantom's force kernel took 1.47x as long in it, the default scene's 1.22x).
-  const std::vector<std::uint64_t> key = morton_keys(mesh_);
-  std::stable_sort(order.begin(), order.end(), [&](Index a, Index b) {
-    const int group_a = cell_groups.empty() ? 0 : cell_groups[a], group_b = cell_groups.empty() ? 0 : cell_groups[b];
-    if (group_a != group_b) return group_a < group_b;
-    if (mesh_.tet_region[a] != mesh_.tet_region[b]) return mesh_.tet_region[a] < mesh_.tet_region[b];
-    return key[a] < key[b];
+  const std::vector<std::uint64_t> key = morton_keys(b.mesh);
+  const std::vector<Index>& region = b.mesh.tet_region;
+  std::stable_sort(order.begin(), order.end(), [&](Index s, Index t) {
+    const int group_s = cell_groups.empty() ? 0 : cell_groups[s], group_t = cell_groups.empty() ? 0 : cell_groups[t];
+    if (group_s != group_t) return group_s < group_t;
+    if (region[s] != region[t]) return region[s] < region[t];
+    return key[s] < key[t];
   });
   if (!cell_groups.empty()) {
-    for (const int g : cell_groups) points_.group_offsets[static_cast<std::size_t>(g) + 1] += points_per_tet;
+    for (const int g : cell_groups) b.points.group_offsets[static_cast<std::size_t>(g) + 1] += points_per_tet;
   } else {
-    points_.group_offsets[1] = static_cast<Index>(count);
+    b.points.group_offsets[1] = static_cast<Index>(count);
   }
-  std::partial_sum(points_.group_offsets.begin(), points_.group_offsets.end(), points_.group_offsets.begin());
+  std::partial_sum(b.points.group_offsets.begin(), b.points.group_offsets.end(), b.points.group_offsets.begin());
   for (const Index t : order) {
-    const auto& tet = mesh_.tets[t];
-    const double volume = tet_volume(mesh_, t);
-    const Vec3* v[4] = {&mesh_.points[tet[0]], &mesh_.points[tet[1]], &mesh_.points[tet[2]], &mesh_.points[tet[3]]};
-    const auto material = static_cast<std::uint16_t>(mesh_.tet_region[t]);
+    const auto& tet = b.mesh.tets[t];
+    const double volume = tet_volume(b.mesh, t);
+    const Vec3* v[4] = {&b.mesh.points[tet[0]], &b.mesh.points[tet[1]], &b.mesh.points[tet[2]], &b.mesh.points[tet[3]]};
+    const auto material = static_cast<std::uint16_t>(b.mesh.tet_region[t]);
     if (points_per_tet == 1) {
-      points_.positions.push_back((*v[0] + *v[1] + *v[2] + *v[3]) / 4.0);
-      points_.weights.push_back(volume);
-      points_.tets.push_back(t);
-      points_.material_index.push_back(material);
+      b.points.positions.push_back((*v[0] + *v[1] + *v[2] + *v[3]) / 4.0);
+      b.points.weights.push_back(volume);
+      b.points.tets.push_back(t);
+      b.points.material_index.push_back(material);
     } else {
       for (int k = 0; k < 4; ++k) {
         Vec3 x = Vec3::Zero();
         for (int j = 0; j < 4; ++j) x += (j == k ? kQuadA : kQuadB) * *v[j];
-        points_.positions.push_back(x);
-        points_.weights.push_back(volume / 4.0);
-        points_.tets.push_back(t);
-        points_.material_index.push_back(material);
+        b.points.positions.push_back(x);
+        b.points.weights.push_back(volume / 4.0);
+        b.points.tets.push_back(t);
+        b.points.material_index.push_back(material);
       }
     }
   }
-  points_.all = {0, points_.count()};
+  b.points.all = {0, b.points.count()};
 }
 
-std::vector<std::vector<Index>> Discretisation::find_supports(const std::vector<Vec3>& points, const char* what) const {
-  const int needed = shape_functions_->minimum_support_size();
+// Support lists of arbitrary points (at least the shape functions' minimum); throws InputError naming `what`.
+std::vector<std::vector<Index>> find_supports(const MeshlessBasis& b, const std::vector<Vec3>& points,
+                                              const char* what) {
+  const int needed = b.shape_functions->minimum_support_size();
   const Index n = static_cast<Index>(points.size());
   std::vector<std::vector<Index>> support(points.size());
   std::vector<RowFailure> failures(static_cast<std::size_t>(omp_get_max_threads()));
@@ -210,17 +182,17 @@ std::vector<std::vector<Index>> Discretisation::find_supports(const std::vector<
     RowFailure& failure = failures[static_cast<std::size_t>(omp_get_thread_num())];
 #pragma omp for schedule(static)
     for (Index r = 0; r < n; ++r) {
-      cloud_.search->within(points[r], cloud_.max_support_radius, candidates);
+      b.cloud.search->within(points[r], b.cloud.max_support_radius, candidates);
       auto& s = support[r];
       for (Index i : candidates)
-        if ((mesh_.points[i] - points[r]).norm() < cloud_.support_radius[i]) s.push_back(i);
+        if ((b.mesh.points[i] - points[r]).norm() < b.cloud.support_radius[i]) s.push_back(i);
       std::sort(s.begin(), s.end());
       if (static_cast<int>(s.size()) < needed && r < failure.row) {
         failure.row = r;
         failure.message = fmt::format(
             "{} {} at {} lies in the support of only {} nodes; the shape functions need at least {}. Increase "
             "/shape_function/support_dilatation (now {:g}) or use a finer, more even mesh",
-            what, r, point_text(points[r]), s.size(), needed, shape_functions_->support_dilatation());
+            what, r, point_text(points[r]), s.size(), needed, b.shape_functions->support_dilatation());
       }
     }
   }
@@ -229,9 +201,11 @@ std::vector<std::vector<Index>> Discretisation::find_supports(const std::vector<
   return support;
 }
 
+// Shape functions at the points on those supports: store(r, k, value, gradient) for each entry, gradients only when
+// asked for; returns the smallest reciprocal condition number of the fits.
 template <class Store>
-double Discretisation::evaluate_rows(const std::vector<Vec3>& points, const std::vector<std::vector<Index>>& supports,
-                                     bool gradients, const char* what, Store store) const {
+double evaluate_rows(const MeshlessBasis& b, const std::vector<Vec3>& points,
+                     const std::vector<std::vector<Index>>& supports, bool gradients, const char* what, Store store) {
   const Index n = static_cast<Index>(points.size());
   std::vector<RowFailure> failures(static_cast<std::size_t>(omp_get_max_threads()));
   std::vector<double> min_condition(static_cast<std::size_t>(omp_get_max_threads()), 1.0);
@@ -249,17 +223,18 @@ double Discretisation::evaluate_rows(const std::vector<Vec3>& points, const std:
       values.resize(s.size());
       grads.resize(gradients ? s.size() : 0);
       for (std::size_t k = 0; k < s.size(); ++k) {
-        coordinates[k] = mesh_.points[s[k]];
-        radii[k] = cloud_.support_radius[s[k]];
+        coordinates[k] = b.mesh.points[s[k]];
+        radii[k] = b.cloud.support_radius[s[k]];
       }
-      const ShapeFunctionFit fit = shape_functions_->evaluate(points[r], coordinates, radii, values, grads);
+      const ShapeFunctionFit fit = b.shape_functions->evaluate(points[r], coordinates, radii, values, grads);
       condition = std::min(condition, fit.reciprocal_condition);
       if (!fit.ok && r < failure.row) {
         failure.row = r;
         failure.message = fmt::format(
             "the shape functions cannot be built at {} {} at {}: its {} support nodes are too few or nearly "
             "coplanar (reciprocal condition {:.2g}). Increase /shape_function/support_dilatation (now {:g})",
-            what, r, point_text(points[r]), s.size(), fit.reciprocal_condition, shape_functions_->support_dilatation());
+            what, r, point_text(points[r]), s.size(), fit.reciprocal_condition,
+            b.shape_functions->support_dilatation());
       }
       for (std::size_t k = 0; k < s.size(); ++k)
         store(r, static_cast<int>(k), values[k], gradients ? grads[k] : Vec3::Zero());
@@ -270,99 +245,153 @@ double Discretisation::evaluate_rows(const std::vector<Vec3>& points, const std:
   return *std::min_element(min_condition.begin(), min_condition.end());
 }
 
-void Discretisation::build_supports(RowPrecision precision) {
+void build_supports(MeshlessBasis& b, RowPrecision precision) {
   {
-    const auto supports = find_supports(points_.positions, "integration point");
-    gradients_.assign(supports, node_count(), precision);
-    points_.support.min_reciprocal_condition =
-        evaluate_rows(points_.positions, supports, true, "integration point",
-                      [&](Index r, int k, double, const Vec3& gradient) { gradients_.set_gradient(r, k, gradient); });
-    points_.support.min = std::numeric_limits<Index>::max();
-    points_.support.max = 0;
-    for (Index r = 0; r < gradients_.rows(); ++r) {
-      points_.support.min = std::min(points_.support.min, gradients_.size(r));
-      points_.support.max = std::max(points_.support.max, gradients_.size(r));
+    const auto supports = find_supports(b, b.points.positions, "integration point");
+    b.gradients.assign(supports, b.mesh.node_count(), precision);
+    b.points.support.min_reciprocal_condition =
+        evaluate_rows(b, b.points.positions, supports, true, "integration point",
+                      [&](Index r, int k, double, const Vec3& gradient) { b.gradients.set_gradient(r, k, gradient); });
+    b.points.support.min = std::numeric_limits<Index>::max();
+    b.points.support.max = 0;
+    for (Index r = 0; r < b.gradients.rows(); ++r) {
+      b.points.support.min = std::min(b.points.support.min, b.gradients.size(r));
+      b.points.support.max = std::max(b.points.support.max, b.gradients.size(r));
     }
-    points_.support.mean = static_cast<double>(gradients_.entries()) / std::max<Index>(gradients_.rows(), 1);
+    b.points.support.mean = static_cast<double>(b.gradients.entries()) / std::max<Index>(b.gradients.rows(), 1);
   }
   {
-    const auto supports = find_supports(mesh_.points, "node");
-    interpolation_.offsets.assign(supports.size() + 1, 0);
+    const auto supports = find_supports(b, b.mesh.points, "node");
+    b.interpolation.offsets.assign(supports.size() + 1, 0);
     for (std::size_t r = 0; r < supports.size(); ++r)
-      interpolation_.offsets[r + 1] = interpolation_.offsets[r] + static_cast<std::int64_t>(supports[r].size());
-    interpolation_.nodes.resize(static_cast<std::size_t>(interpolation_.offsets.back()));
-    interpolation_.values.resize(interpolation_.nodes.size());
+      b.interpolation.offsets[r + 1] = b.interpolation.offsets[r] + static_cast<std::int64_t>(supports[r].size());
+    b.interpolation.nodes.resize(static_cast<std::size_t>(b.interpolation.offsets.back()));
+    b.interpolation.values.resize(b.interpolation.nodes.size());
     for (std::size_t r = 0; r < supports.size(); ++r)
-      std::copy(supports[r].begin(), supports[r].end(), interpolation_.nodes.begin() + interpolation_.offsets[r]);
-    evaluate_rows(mesh_.points, supports, false, "node", [&](Index r, int k, double value, const Vec3&) {
-      interpolation_.values[static_cast<std::size_t>(interpolation_.offsets[r] + k)] = value;
+      std::copy(supports[r].begin(), supports[r].end(), b.interpolation.nodes.begin() + b.interpolation.offsets[r]);
+    evaluate_rows(b, b.mesh.points, supports, false, "node", [&](Index r, int k, double value, const Vec3&) {
+      b.interpolation.values[static_cast<std::size_t>(b.interpolation.offsets[r] + k)] = value;
     });
   }
 
   // Every node must carry mass: it must lie in the support of some integration point.
-  std::vector<char> used(mesh_.points.size(), 0);
-  for (Index ip = 0; ip < gradients_.rows(); ++ip)
-    for (int k = 0; k < gradients_.size(ip); ++k) used[gradients_.node(ip, k)] = 1;
+  std::vector<char> used(b.mesh.points.size(), 0);
+  for (Index ip = 0; ip < b.gradients.rows(); ++ip)
+    for (int k = 0; k < b.gradients.size(ip); ++k) used[b.gradients.node(ip, k)] = 1;
   for (std::size_t i = 0; i < used.size(); ++i) {
     if (!used[i])
       throw InputError("/shape_function",
                        fmt::format("node {} at {} is in the support of no integration point and would have no mass; "
                                    "increase /shape_function/support_dilatation",
-                                   i, point_text(mesh_.points[i])));
+                                   i, point_text(b.mesh.points[i])));
   }
 }
 
-void Discretisation::build_time_steps() {
-  const Index n = points_.count();
-  points_.critical_time_steps.resize(static_cast<std::size_t>(n));
-#pragma omp parallel for schedule(static)
-  for (Index ip = 0; ip < n; ++ip) {
-    double sum = 0.0;
-    for (int k = 0; k < gradients_.size(ip); ++k) {
-      const Vec3 g = gradients_.gradient(ip, k);
-      sum += g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
-    }
-    const Material& law = material(ip);
-    const double wave_speed = std::sqrt(law.p_wave_modulus() / law.density());
-    points_.critical_time_steps[ip] = 2.0 / (wave_speed * std::sqrt(static_cast<double>(gradients_.size(ip)) * sum));
-  }
+// test_gradient (discretisation.hpp) on a basis.
+Vec3 test_gradient_at(const MeshlessBasis& b, Index ip, int k) {
+  const double* xi = b.correction.at_slots.data() + 4 * static_cast<std::size_t>(b.gradients.entry_slot(ip, k));
+  const double* mean = b.correction.means.data() + 3 * static_cast<std::size_t>(ip);
+  return b.gradients.gradient(ip, k) + Vec3(xi[0] - mean[0], xi[1] - mean[1], xi[2] - mean[2]);
 }
 
-void Discretisation::build_integration_correction() {
-  const std::vector<Vec3> xi = integration_correction(mesh_, gradients_, interpolation_, points_.weights);
-  for (Index i = 0; i < node_count(); ++i)
-    for (int d = 0; d < 3; ++d) correction_.at_slots[4 * static_cast<std::size_t>(gradients_.slot(i)) + d] = xi[i][d];
-  for (Index ip = 0; ip < points_.count(); ++ip) {
+void build_integration_correction(MeshlessBasis& b) {
+  const std::vector<Vec3> xi = integration_correction(b.mesh, b.gradients, b.interpolation, b.points.weights);
+  for (Index i = 0; i < b.mesh.node_count(); ++i)
+    for (int d = 0; d < 3; ++d) b.correction.at_slots[4 * static_cast<std::size_t>(b.gradients.slot(i)) + d] = xi[i][d];
+  for (Index ip = 0; ip < b.points.count(); ++ip) {
     Vec3 mean = Vec3::Zero();
-    for (int k = 0; k < gradients_.size(ip); ++k) mean += xi[gradients_.node(ip, k)];
-    mean /= gradients_.size(ip);
-    for (int d = 0; d < 3; ++d) correction_.means[3 * static_cast<std::size_t>(ip) + d] = mean[d];
+    for (int k = 0; k < b.gradients.size(ip); ++k) mean += xi[b.gradients.node(ip, k)];
+    mean /= b.gradients.size(ip);
+    for (int d = 0; d < 3; ++d) b.correction.means[3 * static_cast<std::size_t>(ip) + d] = mean[d];
   }
   // Single-precision rows also store the scatter's test gradients: it then streams a second row per point instead
   // of reading every support node's correction and subtracting the mean (a third fewer of its instructions, and
   // 28 bytes per entry, as many as double rows without them). Double rows leave the kernel to form them: a stored
   // copy would bring them to 52 bytes per entry, and the brain phantom's kernel took 43% longer (performance.md).
-  if (gradients_.precision() != RowPrecision::single_precision) return;
-  gradients_.own_test_gradients();  // then each point writes its own entries, in parallel
+  if (b.gradients.precision() != RowPrecision::single_precision) return;
+  b.gradients.own_test_gradients();  // then each point writes its own entries, in parallel
 #pragma omp parallel for schedule(static)
-  for (Index ip = 0; ip < points_.count(); ++ip)
-    for (int k = 0; k < gradients_.size(ip); ++k)
-      gradients_.set_test_gradient(ip, k, mtled::test_gradient(*this, ip, k));
+  for (Index ip = 0; ip < b.points.count(); ++ip)
+    for (int k = 0; k < b.gradients.size(ip); ++k) b.gradients.set_test_gradient(ip, k, test_gradient_at(b, ip, k));
+}
+
+// The basis: the cloud, the integration points, the shape functions' rows at them and at the nodes, and the
+// integration correction.
+std::shared_ptr<const MeshlessBasis> build_basis(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
+                                                 const Discretisation::Options& options) {
+  auto basis = std::make_shared<MeshlessBasis>();
+  MeshlessBasis& b = *basis;
+  b.mesh = std::move(mesh);
+  b.shape_functions = std::move(shape_functions);
+  if (b.mesh.region_names.size() > std::numeric_limits<std::uint16_t>::max())
+    throw InputError(b.mesh.source, "more than 65535 material regions");
+  NodeCloud& cloud = b.cloud;
+  cloud.surface = surface_nodes(b.mesh);
+  cloud.spacing = mean_edge_length_at_nodes(b.mesh);
+  const double dilatation = b.shape_functions->support_dilatation();
+  cloud.support_radius.resize(cloud.spacing.size());
+  for (std::size_t i = 0; i < cloud.spacing.size(); ++i) cloud.support_radius[i] = dilatation * cloud.spacing[i];
+  cloud.max_support_radius = *std::max_element(cloud.support_radius.begin(), cloud.support_radius.end());
+  const auto [lo, hi] = bounding_box(b.mesh.points);
+  cloud.length_scale = (hi - lo).norm();
+  cloud.search = std::make_unique<PointSearch>(b.mesh.points);
+
+  build_integration_points(b, options.integration_points_per_tet, options.cell_groups);
+  build_supports(b, options.precision);
+  const std::size_t padded = 4 * (static_cast<std::size_t>(b.mesh.node_count()) + 1);
+  b.correction.at_slots.assign(padded, 0.0);
+  b.correction.means.assign(3 * static_cast<std::size_t>(b.points.count()), 0.0);
+  if (options.consistent_integration) build_integration_correction(b);
+  return basis;
+}
+
+}  // namespace
+
+Discretisation::Discretisation(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
+                               std::vector<std::shared_ptr<const Material>> region_materials, Options options)
+    : Discretisation(build_basis(std::move(mesh), std::move(shape_functions), options), std::move(region_materials),
+                     options.threads) {}
+
+Discretisation::Discretisation(std::shared_ptr<const MeshlessBasis> basis,
+                               std::vector<std::shared_ptr<const Material>> region_materials, int threads)
+    : basis_(std::move(basis)), materials_(std::move(region_materials)) {
+  if (materials_.size() != basis_->mesh.region_names.size())
+    throw std::logic_error("Discretisation: one material per mesh region is required");
+  build_time_steps();
+  team_ = std::make_unique<ThreadTeam>(threads > 0 ? threads : omp_get_max_threads());
+}
+
+Discretisation::~Discretisation() = default;
+
+void Discretisation::build_time_steps() {
+  const Index n = points().count();
+  critical_time_steps_.resize(static_cast<std::size_t>(n));
+#pragma omp parallel for schedule(static)
+  for (Index ip = 0; ip < n; ++ip) {
+    double sum = 0.0;
+    for (int k = 0; k < gradients().size(ip); ++k) {
+      const Vec3 g = gradients().gradient(ip, k);
+      sum += g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+    }
+    const Material& law = material(ip);
+    const double wave_speed = std::sqrt(law.p_wave_modulus() / law.density());
+    critical_time_steps_[ip] = 2.0 / (wave_speed * std::sqrt(static_cast<double>(gradients().size(ip)) * sum));
+  }
 }
 
 std::vector<double> Discretisation::lumped_mass(std::span<const double> density_scale) const {
   std::vector<double> mass(static_cast<std::size_t>(node_count()), 0.0);
-  for (Index ip = 0; ip < points_.count(); ++ip) {
+  for (Index ip = 0; ip < points().count(); ++ip) {
     const double scale = density_scale.empty() ? 1.0 : density_scale[ip];
     const double share =
-        scale * material(ip).density() * points_.weights[ip] / static_cast<double>(gradients_.size(ip));
-    for (int k = 0; k < gradients_.size(ip); ++k) mass[gradients_.node(ip, k)] += share;
+        scale * material(ip).density() * points().weights[ip] / static_cast<double>(gradients().size(ip));
+    for (int k = 0; k < gradients().size(ip); ++k) mass[gradients().node(ip, k)] += share;
   }
   return mass;
 }
 
 Mat3 Discretisation::deformation_gradient(Index ip, std::span<const double> u) const {
-  return deformation_gradient_at(gradients_, ip, u.data());
+  return deformation_gradient_at(gradients(), ip, u.data());
 }
 
 void Discretisation::interpolate(std::span<const double> u, std::span<double> out) const {
@@ -382,37 +411,33 @@ void Discretisation::interpolate(std::span<const double> u, std::span<double> ou
 
 Vec3 Discretisation::interpolate_node(Index node, std::span<const double> u) const {
   Vec3 v = Vec3::Zero();
-  for (std::int64_t k = interpolation_.offsets[node]; k < interpolation_.offsets[node + 1]; ++k) {
-    const double* ui = &u[3 * static_cast<std::size_t>(interpolation_.nodes[k])];
-    v += interpolation_.values[k] * Vec3(ui[0], ui[1], ui[2]);
+  for (std::int64_t k = basis_->interpolation.offsets[node]; k < basis_->interpolation.offsets[node + 1]; ++k) {
+    const double* ui = &u[3 * static_cast<std::size_t>(basis_->interpolation.nodes[k])];
+    v += basis_->interpolation.values[k] * Vec3(ui[0], ui[1], ui[2]);
   }
   return v;
 }
 
 bool Discretisation::shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values) const {
   std::vector<Index> candidates;
-  cloud_.search->within(x, cloud_.max_support_radius, candidates);
+  basis_->cloud.search->within(x, basis_->cloud.max_support_radius, candidates);
   nodes.clear();
   for (Index i : candidates)
-    if ((mesh_.points[i] - x).norm() < cloud_.support_radius[i]) nodes.push_back(i);
+    if ((basis_->mesh.points[i] - x).norm() < basis_->cloud.support_radius[i]) nodes.push_back(i);
   std::sort(nodes.begin(), nodes.end());
-  if (static_cast<int>(nodes.size()) < shape_functions_->minimum_support_size()) return false;
+  if (static_cast<int>(nodes.size()) < basis_->shape_functions->minimum_support_size()) return false;
   std::vector<Vec3> coordinates(nodes.size());
   std::vector<double> radii(nodes.size());
   for (std::size_t k = 0; k < nodes.size(); ++k) {
-    coordinates[k] = mesh_.points[nodes[k]];
-    radii[k] = cloud_.support_radius[nodes[k]];
+    coordinates[k] = basis_->mesh.points[nodes[k]];
+    radii[k] = basis_->cloud.support_radius[nodes[k]];
   }
   values.resize(nodes.size());
-  return shape_functions_->evaluate(x, coordinates, radii, values, {}).ok;
+  return basis_->shape_functions->evaluate(x, coordinates, radii, values, {}).ok;
 }
 
 Vec3 test_gradient(const Discretisation& discretisation, Index ip, int k) {
-  const GradientRows& rows = discretisation.gradients();
-  const IntegrationCorrection& correction = discretisation.correction();
-  const double* xi = correction.at_slots.data() + 4 * static_cast<std::size_t>(rows.entry_slot(ip, k));
-  const double* mean = correction.means.data() + 3 * static_cast<std::size_t>(ip);
-  return rows.gradient(ip, k) + Vec3(xi[0] - mean[0], xi[1] - mean[1], xi[2] - mean[2]);
+  return test_gradient_at(*discretisation.basis(), ip, k);
 }
 
 std::vector<double> stiffening(const Discretisation& discretisation, std::span<const double> u) {

@@ -71,13 +71,35 @@ std::vector<std::shared_ptr<const Material>> region_materials(const Scene& scene
 
 }  // namespace
 
-MechanicalSystem::MechanicalSystem(const Scene& scene, PluginCatalog& catalog) {
+std::string BasisCache::key(const Scene& scene) {
+  const json& root = scene.document.root;
+  return json::array({scene.document.directory().string(), root.value("mesh", json()),
+                      root.value("shape_function", json()), root.value("discretisation", json())})
+      .dump();
+}
+
+std::shared_ptr<const MeshlessBasis> BasisCache::find(const Scene& scene) const {
+  if (scene.backend) return nullptr;
+  const std::lock_guard lock(mutex_);
+  const auto it = bases_.find(key(scene));
+  return it == bases_.end() ? nullptr : it->second;
+}
+
+void BasisCache::keep(const Scene& scene, std::shared_ptr<const MeshlessBasis> basis) {
+  if (scene.backend) return;
+  const std::lock_guard lock(mutex_);
+  bases_.emplace(key(scene), std::move(basis));
+}
+
+std::size_t BasisCache::size() const {
+  const std::lock_guard lock(mutex_);
+  return bases_.size();
+}
+
+MechanicalSystem::MechanicalSystem(const Scene& scene, PluginCatalog& catalog, BasisCache* bases) {
   // The backend first: one that cannot run here (no device) stops the run before the setup's work.
   engine_ = scene.backend ? build_component<StepEngine>(catalog, *scene.backend) : make_cpu_engine();
-  TetMesh mesh = load_scene_mesh(scene, catalog);
-  auto materials = region_materials(scene, catalog, mesh);
-  std::vector<int> cell_groups = engine_->cell_groups(mesh);
-  build_discretisation(scene, catalog, std::move(mesh), std::move(materials), std::move(cell_groups));
+  build_discretisation(scene, catalog, bases);
   build_drivers(scene, catalog);
   if (scene.backend)
     guarded(scene.backend->parameters, "setting up the backend", [&] { engine_->setup(*kernel_); });
@@ -88,7 +110,7 @@ MechanicalSystem::MechanicalSystem(const Scene& scene, PluginCatalog& catalog) {
   const std::size_t dofs = 3 * static_cast<std::size_t>(discretisation_->node_count());
   mass_ = discretisation_->lumped_mass();
   engine_->set_mass(mass_);
-  const auto& dt = discretisation_->points().critical_time_steps;
+  const auto& dt = discretisation_->critical_time_steps();
   unscaled_stable_time_step_ = stable_time_step_ = *std::min_element(dt.begin(), dt.end());
   update_drivers();
   std::vector<double> u(dofs, 0.0);
@@ -96,18 +118,25 @@ MechanicalSystem::MechanicalSystem(const Scene& scene, PluginCatalog& catalog) {
   engine_->set_state(u, std::vector<double>(dofs, 0.0));
 }
 
-void MechanicalSystem::build_discretisation(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
-                                            std::vector<std::shared_ptr<const Material>> materials,
-                                            std::vector<int> cell_groups) {
-  auto shape_functions = build_component<ShapeFunctions>(catalog, scene.shape_function);
-  Discretisation::Options options;
-  const auto discretisation = scene.discretisation.read<DiscretisationSettings>();
-  options.integration_points_per_tet = discretisation.integration_points_per_tet;
-  options.consistent_integration = discretisation.consistent_integration;
-  options.precision =
-      discretisation.precision == "single" ? RowPrecision::single_precision : RowPrecision::double_precision;
-  options.cell_groups = std::move(cell_groups);
-  discretisation_ = std::make_unique<Discretisation>(std::move(mesh), shape_functions, std::move(materials), options);
+void MechanicalSystem::build_discretisation(const Scene& scene, PluginCatalog& catalog, BasisCache* bases) {
+  if (auto basis = bases ? bases->find(scene) : nullptr) {
+    auto materials = region_materials(scene, catalog, basis->mesh);
+    discretisation_ = std::make_unique<Discretisation>(std::move(basis), std::move(materials), 0);
+    log().debug("discretisation: the basis built for an earlier run of this mesh");
+  } else {
+    TetMesh mesh = load_scene_mesh(scene, catalog);
+    auto materials = region_materials(scene, catalog, mesh);
+    Discretisation::Options options;
+    options.cell_groups = engine_->cell_groups(mesh);
+    auto shape_functions = build_component<ShapeFunctions>(catalog, scene.shape_function);
+    const auto discretisation = scene.discretisation.read<DiscretisationSettings>();
+    options.integration_points_per_tet = discretisation.integration_points_per_tet;
+    options.consistent_integration = discretisation.consistent_integration;
+    options.precision =
+        discretisation.precision == "single" ? RowPrecision::single_precision : RowPrecision::double_precision;
+    discretisation_ = std::make_unique<Discretisation>(std::move(mesh), shape_functions, std::move(materials), options);
+    if (bases) bases->keep(scene, discretisation_->basis());
+  }
   kernel_ = std::make_unique<ForceKernel>(
       *discretisation_, scene.volumetric ? build_component<VolumetricTreatment>(catalog, *scene.volumetric) : nullptr);
   const SupportStatistics stats = discretisation_->points().support;
@@ -147,7 +176,7 @@ void MechanicalSystem::build_drivers(const Scene& scene, PluginCatalog& catalog)
 MechanicalSystem::~MechanicalSystem() = default;
 
 void MechanicalSystem::equalise_critical_steps() {
-  const auto& dt = discretisation_->points().critical_time_steps;
+  const auto& dt = discretisation_->critical_time_steps();
   const std::vector<double> scale = scale_masses({});
   double smallest = dt[0] * std::sqrt(scale[0]);
   for (std::size_t i = 0; i < dt.size(); ++i) smallest = std::min(smallest, dt[i] * std::sqrt(scale[i]));
@@ -167,7 +196,7 @@ void MechanicalSystem::equalise_current_critical_steps() {
 }
 
 std::vector<double> MechanicalSystem::scale_masses(std::span<const double> stiffening) {
-  const auto& dt = discretisation_->points().critical_time_steps;
+  const auto& dt = discretisation_->critical_time_steps();
   const double target = *std::max_element(dt.begin(), dt.end());
   std::vector<double> scale(dt.size());
   for (std::size_t i = 0; i < dt.size(); ++i) {

@@ -52,7 +52,7 @@ std::vector<double> explicit_node_stiffness(const Discretisation& discretisation
   const GradientRows& rows = discretisation.gradients();
   const IntegrationPoints& points = discretisation.points();
   for (Index ip = 0; ip < points.count(); ++ip) {
-    const double dt = points.critical_time_steps[ip];
+    const double dt = discretisation.critical_time_steps()[ip];
     const double share =
         discretisation.material(ip).density() * points.weights[ip] / (static_cast<double>(rows.size(ip)) * dt * dt);
     for (int k = 0; k < rows.size(ip); ++k) stiffness[rows.node(ip, k)] += share;

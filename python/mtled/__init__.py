@@ -203,7 +203,7 @@ def study(path, output, threads: int = 0, reuse: bool = False, log_level: str = 
 
 def fit(path, output, overrides=(), threads: int = 0, synthesize: Optional[int] = None, log_level: str = "warn",
         plugin_paths=()) -> dict:
-    """`mtled fit` (each forward run a child `mtled run`): the report, fit.json, as a dict. `overrides` are --set's
+    """`mtled fit` (its forward runs in this process, as the command makes them): the report, fit.json, as a dict. `overrides` are --set's
     "/pointer=value" on the fit file. `synthesize=SEED` fits nothing: it makes data from the model at the start values
     with noise from that seed, as `--synthesize SEED` does, and returns {"data": [the files in output/data]}."""
     code = _mtled.fit(Path(path), Path(output), list(overrides), threads, synthesize, [Path(p) for p in plugin_paths],

@@ -194,7 +194,8 @@ void bind_run(py::module_& m) {
   m.def("request_interrupt", [](bool requested) { interrupt_requested = requested; });
 }
 
-// mtled study and mtled fit as the command line runs them (each run a child `mtled run`); the exit code.
+// mtled study and mtled fit as the command line runs them (a study's runs child `mtled run`s, a fit's in this process);
+// the exit code.
 void bind_studies(py::module_& m) {
   m.def(
       "study",

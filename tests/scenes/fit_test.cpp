@@ -12,6 +12,7 @@
 #include <set>
 
 #include "mtled/errors.hpp"
+#include "scene_run.hpp"
 #include "test_support.hpp"
 #include "xml_check.hpp"
 
@@ -319,7 +320,9 @@ TEST(Fit, AnUnstableForwardRunIsABadPointNotTheEnd) {
   fit["experiments"][0]["sigma"] = 5e-4;
   write_text(folder / "fit.json", fit.dump(2));
   const fit::Plan plan = fit::read(folder / "fit.json", {}, {plugin_dir()});
-  fit::Evaluator evaluator(plan, folder / "out", {plugin_dir()}, "warn", MTLED_EXECUTABLE);
+  BasisCache bases;
+  fit::Evaluator evaluator(plan, folder / "out", {plugin_dir()}, "warn",
+                           [&](const fit::ForwardRun& run) { return app::run_forward_in_process(run, bases); });
   const auto evaluations = evaluator.evaluate({{722, 1.0}, {722, 8.0}}, 0, "start");
   ASSERT_EQ(evaluations.size(), 2u);
   EXPECT_EQ(evaluations[0].status, "ok") << evaluations[0].message;
@@ -328,6 +331,57 @@ TEST(Fit, AnUnstableForwardRunIsABadPointNotTheEnd) {
   EXPECT_TRUE(std::isnan(evaluations[1].objective));
   expect_contains(evaluations[1].message, "compression");
   EXPECT_EQ(evaluator.history().size(), 2u);
+}
+
+// Forward runs in the fit's process share each mesh's meshless basis (one built for the experiment, by its first run)
+// and predict what child `mtled run`s predict, to the last bit: the basis is the same computation, done once.
+TEST(Fit, InProcessRunsShareTheBasisAndPredictAsChildRunsDo) {
+  const fs::path folder = scratch_dir("fit-in-process");
+  write_text(folder / "cube.json", compression_cube().dump(2));
+  write_compression_template(folder / "compression.csv");
+  json file = compression_fit("compression.csv");
+  file["threads"] = 1;
+  write_text(folder / "fit.json", file.dump(2));
+  const fit::Plan plan = fit::read(folder / "fit.json", {}, {plugin_dir()});
+  const std::vector<std::vector<double>> points = {{722, -1.3}, {900, -1.0}, {500, -2.0}};
+  fit::Evaluator children(plan, folder / "children", {plugin_dir()}, "warn", {}, MTLED_EXECUTABLE);
+  const auto child = children.evaluate(points, 0, "start");
+  BasisCache bases;
+  fit::Evaluator here(plan, folder / "here", {plugin_dir()}, "debug",
+                      [&](const fit::ForwardRun& run) { return app::run_forward_in_process(run, bases); });
+  const auto first = here.evaluate({points[0]}, 0, "start");  // builds the basis
+  const auto rest = here.evaluate({points[1], points[2]}, 0, "jacobian");
+  EXPECT_EQ(bases.size(), 1u);
+  ASSERT_EQ(first.size() + rest.size(), child.size());
+  for (std::size_t p = 0; p < child.size(); ++p) {
+    const fit::Evaluation& e = p == 0 ? first[0] : rest[p - 1];
+    ASSERT_EQ(e.status, "ok") << e.message;
+    ASSERT_EQ(child[p].status, "ok") << child[p].message;
+    EXPECT_EQ(e.model, child[p].model) << "point " << p;
+    const std::string log = read_text(e.folder / "compression" / "mtled.log");
+    EXPECT_EQ(log.find("the basis built for an earlier run") != std::string::npos, p > 0) << log;
+    expect_contains(log, "done:");  // the run's messages in its own folder, as a child's
+  }
+}
+
+// A forward run in the fit's process still going after timeout_s is stopped and recorded as "timeout", as a child
+// run's is; the fit goes on.
+TEST(Fit, AnInProcessRunPastTheTimeoutIsStoppedAndRecorded) {
+  const fs::path folder = scratch_dir("fit-timeout");
+  write_text(folder / "cube.json", compression_cube().dump(2));
+  write_compression_template(folder / "compression.csv");
+  json file = compression_fit("compression.csv");
+  file["timeout_s"] = 0.05;  // the cube's run takes about a second
+  write_text(folder / "fit.json", file.dump(2));
+  const fit::Plan plan = fit::read(folder / "fit.json", {}, {plugin_dir()});
+  BasisCache bases;
+  fit::Evaluator evaluator(plan, folder / "out", {plugin_dir()}, "warn",
+                           [&](const fit::ForwardRun& run) { return app::run_forward_in_process(run, bases); });
+  const auto evaluations = evaluator.evaluate({{722, -1.3}}, 0, "start");
+  ASSERT_EQ(evaluations.size(), 1u);
+  EXPECT_EQ(evaluations[0].status, "timeout") << evaluations[0].message;
+  EXPECT_TRUE(std::isnan(evaluations[0].objective));
+  EXPECT_EQ(read_json(evaluations[0].folder / "compression" / "summary.json")["status"], "timeout");
 }
 
 // A launcher (srun in a batch job, mpirun for ranks) goes before each forward run, and what the fit measures is the
@@ -345,7 +399,7 @@ TEST(Fit, ALauncherGoesBeforeEachForwardRunAndChangesNoPrediction) {
     if (!launcher.is_null()) file["launcher"] = launcher;
     write_text(folder / (name + ".json"), file.dump(2));
     const fit::Plan plan = fit::read(folder / (name + ".json"), {}, {plugin_dir()});
-    fit::Evaluator evaluator(plan, folder / name, {plugin_dir()}, "warn", MTLED_EXECUTABLE);
+    fit::Evaluator evaluator(plan, folder / name, {plugin_dir()}, "warn", {}, MTLED_EXECUTABLE);
     return evaluator.evaluate(points, 0, "start");
   };
   const auto expect_same = [&](const std::vector<fit::Evaluation>& a, const std::vector<fit::Evaluation>& b) {

@@ -4,7 +4,8 @@
 // (R_I = d_c x mean edge length at I), all in the reference configuration (Total Lagrangian). Shape-function
 // gradients and support lists are stored contiguously, one row per integration point, in blocks the vectorised
 // force kernel streams (GradientRows). Drivers, monitors, writers and post-processing read it through a const
-// reference; the force evaluation's run-time state lives apart, in the ForceKernel (force_kernel.hpp).
+// reference; the force evaluation's run-time state lives apart, in the ForceKernel (force_kernel.hpp). What depends
+// on the mesh alone (MeshlessBasis) is shared by discretisations of one mesh with other materials.
 #include <memory>
 #include <span>
 #include <vector>
@@ -42,9 +43,6 @@ struct IntegrationPoints {
   std::vector<double> weights;                // m^3
   std::vector<Index> tets;                    // the background tet each lies in
   std::vector<std::uint16_t> material_index;  // into the region materials (the tet's region)
-  // Critical time step of each point for the unscaled density (Joldes, Wittek, Miller, IJNME 2012):
-  // dt = 2 / (c sqrt(n sum_I |grad N_I|^2)), c = sqrt((lambda + 2 mu) / rho).
-  std::vector<double> critical_time_steps;
   SupportStatistics support;
   std::vector<Index> group_offsets;  // first point of each cell group, then the point count
   PointRange all{0, 0};
@@ -65,6 +63,19 @@ struct IntegrationPoints {
 struct IntegrationCorrection {
   AlignedVector<double> at_slots;
   std::vector<double> means;
+};
+
+// Everything a discretisation builds from the mesh, the shape functions and its Options, none of it from the
+// materials: a fit's forward runs, which change materials or the needle, build it once and share it (MechanicalSystem's
+// BasisCache). Immutable once built.
+struct MeshlessBasis {
+  TetMesh mesh;
+  std::shared_ptr<const ShapeFunctions> shape_functions;
+  NodeCloud cloud;
+  IntegrationPoints points;
+  GradientRows gradients;
+  SupportRows interpolation;
+  IntegrationCorrection correction;
 };
 
 class Discretisation {
@@ -94,20 +105,28 @@ class Discretisation {
   // `region_materials[r]` fills mesh region r.
   Discretisation(TetMesh mesh, std::shared_ptr<const ShapeFunctions> shape_functions,
                  std::vector<std::shared_ptr<const Material>> region_materials, Options options);
+  // A basis built before (the same mesh, shape functions and Options), with these materials and `threads` (0: as
+  // Options::threads).
+  Discretisation(std::shared_ptr<const MeshlessBasis> basis,
+                 std::vector<std::shared_ptr<const Material>> region_materials, int threads);
   ~Discretisation();
   Discretisation(const Discretisation&) = delete;
   Discretisation& operator=(const Discretisation&) = delete;
 
   // ---- what was built
-  const TetMesh& mesh() const { return mesh_; }  // the background tets, regions and named node sets
-  Index node_count() const { return mesh_.node_count(); }
-  const std::vector<Vec3>& nodes() const { return mesh_.points; }
-  const NodeCloud& cloud() const { return cloud_; }
-  const IntegrationPoints& points() const { return points_; }
-  const Material& material(Index ip) const { return *materials_[points_.material_index[ip]]; }
-  const GradientRows& gradients() const { return gradients_; }         // grad N_I at the integration points
-  const SupportRows& interpolation() const { return interpolation_; }  // N_I(X_J), one row per node J
-  const IntegrationCorrection& correction() const { return correction_; }
+  const std::shared_ptr<const MeshlessBasis>& basis() const { return basis_; }
+  const TetMesh& mesh() const { return basis_->mesh; }  // the background tets, regions and named node sets
+  Index node_count() const { return basis_->mesh.node_count(); }
+  const std::vector<Vec3>& nodes() const { return basis_->mesh.points; }
+  const NodeCloud& cloud() const { return basis_->cloud; }
+  const IntegrationPoints& points() const { return basis_->points; }
+  const Material& material(Index ip) const { return *materials_[basis_->points.material_index[ip]]; }
+  const GradientRows& gradients() const { return basis_->gradients; }         // grad N_I at the integration points
+  const SupportRows& interpolation() const { return basis_->interpolation; }  // N_I(X_J), one row per node J
+  const IntegrationCorrection& correction() const { return basis_->correction; }
+  // Critical time step of each integration point for the unscaled density (Joldes, Wittek, Miller, IJNME 2012):
+  // dt = 2 / (c sqrt(n sum_I |grad N_I|^2)), c = sqrt((lambda + 2 mu) / rho).
+  const std::vector<double>& critical_time_steps() const { return critical_time_steps_; }
   // The run's threads: the force kernel's, and the interpolation's between steps.
   ThreadTeam& team() const { return *team_; }
 
@@ -124,26 +143,11 @@ class Discretisation {
   std::vector<double> lumped_mass(std::span<const double> density_scale = {}) const;
 
  private:
-  void build_integration_points(int points_per_tet, const std::vector<int>& cell_groups);
-  void build_supports(RowPrecision precision);
   void build_time_steps();
-  void build_integration_correction();
-  // Support lists of arbitrary points (at least the shape functions' minimum); throws InputError naming `what`.
-  std::vector<std::vector<Index>> find_supports(const std::vector<Vec3>& points, const char* what) const;
-  // Shape functions at the points on those supports: store(r, k, value, gradient) for each entry, gradients only
-  // when asked for; returns the smallest reciprocal condition number of the fits.
-  template <class Store>
-  double evaluate_rows(const std::vector<Vec3>& points, const std::vector<std::vector<Index>>& supports, bool gradients,
-                       const char* what, Store store) const;
 
-  TetMesh mesh_;
-  std::shared_ptr<const ShapeFunctions> shape_functions_;
+  std::shared_ptr<const MeshlessBasis> basis_;
   std::vector<std::shared_ptr<const Material>> materials_;  // per region
-  NodeCloud cloud_;
-  IntegrationPoints points_;
-  GradientRows gradients_;
-  SupportRows interpolation_;
-  IntegrationCorrection correction_;
+  std::vector<double> critical_time_steps_;
   std::unique_ptr<ThreadTeam> team_;
 };
 
@@ -153,7 +157,7 @@ Vec3 test_gradient(const Discretisation& discretisation, Index ip, int k);
 
 // How much stiffer each integration point's material is at the displacement u than at rest: the largest eigenvalue
 // of its tangent dP/dF at u over that at F = I, at least 1 (a softer point, or one whose F the law refuses, gets 1).
-// Its critical step at u is about IntegrationPoints::critical_time_steps / sqrt(this). At each point's own F (a
+// Its critical step at u is about Discretisation::critical_time_steps / sqrt(this). At each point's own F (a
 // volumetric treatment's average is left out: this only sizes masses). Parallel on the discretisation's team.
 std::vector<double> stiffening(const Discretisation& discretisation, std::span<const double> u);
 

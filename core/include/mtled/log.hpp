@@ -2,6 +2,8 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <filesystem>
+#include <memory>
 #include <string_view>
 
 namespace mtled {
@@ -10,6 +12,21 @@ namespace mtled {
 spdlog::logger& log();
 // Level names: trace, debug, info, warn, error, off.
 void set_log_level(const std::string& level);
+
+// While it lives, log() on the thread that made it writes to `file` at `level` instead: a run in the calling process (a
+// fit's forward run) keeps its messages in its own folder, as a child process's are. Other threads (a run's thread
+// team) still log to stderr.
+class ThreadLogFile {
+ public:
+  ThreadLogFile(const std::filesystem::path& file, const std::string& level);
+  ~ThreadLogFile();
+  ThreadLogFile(const ThreadLogFile&) = delete;
+  ThreadLogFile& operator=(const ThreadLogFile&) = delete;
+
+ private:
+  std::shared_ptr<spdlog::logger> logger_;
+  spdlog::logger* previous_;
+};
 
 // Where a long command's time goes, at debug level: each lap("what") logs the seconds since the previous lap.
 class PhaseLog {

@@ -3,8 +3,11 @@
 // drivers (boundary conditions and the needle) with the constraints and forces they impose, the masses, and the state,
 // which lives in the step engine (the CPU's, or a backend's). It is the DiscreteSystem an integrator advances; the
 // TimeLoop (time_loop.hpp) runs it and calls the monitors, which read it through a RunContext and a StepRecord.
+#include <map>
 #include <memory>
+#include <mutex>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "mtled/constraints.hpp"
@@ -23,10 +26,27 @@ namespace mtled {
 // checked (`mtled mesh` writes it out).
 TetMesh load_scene_mesh(const Scene& scene, PluginCatalog& catalog);
 
+// Meshless bases kept for later systems of the same mesh: a fit's forward runs change materials or the needle, so they
+// read or generate the mesh, find the supports and build the shape functions' rows and the integration correction once.
+// A scene's basis is the one kept for its mesh, shape_function and discretisation sections as written, read from the
+// same folder; a scene with a backend always builds its own (its engine may group the cells). Thread-safe.
+class BasisCache {
+ public:
+  std::shared_ptr<const MeshlessBasis> find(const Scene& scene) const;
+  void keep(const Scene& scene, std::shared_ptr<const MeshlessBasis> basis);
+  std::size_t size() const;
+
+ private:
+  static std::string key(const Scene& scene);
+  mutable std::mutex mutex_;
+  std::map<std::string, std::shared_ptr<const MeshlessBasis>> bases_;
+};
+
 class MechanicalSystem final : public DiscreteSystem, private StepControl {
  public:
   // The backend, the mesh, the discretisation, the drivers, then the state at rest with the constraints applied.
-  MechanicalSystem(const Scene& scene, PluginCatalog& catalog);
+  // `bases`: where the discretisation's basis is looked up first, and kept when built (null: always built).
+  MechanicalSystem(const Scene& scene, PluginCatalog& catalog, BasisCache* bases = nullptr);
   ~MechanicalSystem() override;
   MechanicalSystem(const MechanicalSystem&) = delete;
   MechanicalSystem& operator=(const MechanicalSystem&) = delete;
@@ -81,8 +101,7 @@ class MechanicalSystem final : public DiscreteSystem, private StepControl {
   // The masses for every integration point at the setup's largest critical step, each point's step taken at its
   // stiffening (empty: as at rest); returns the density scales.
   std::vector<double> scale_masses(std::span<const double> stiffening);
-  void build_discretisation(const Scene& scene, PluginCatalog& catalog, TetMesh mesh,
-                            std::vector<std::shared_ptr<const Material>> materials, std::vector<int> cell_groups);
+  void build_discretisation(const Scene& scene, PluginCatalog& catalog, BasisCache* bases);
   void build_drivers(const Scene& scene, PluginCatalog& catalog);
   void update_drivers();
   // The step's end up to the new state: the load state moves on, the drivers update, the constraints correct the

@@ -9,7 +9,8 @@ namespace mtled {
 
 class Simulation {
  public:
-  Simulation(const Scene& scene, PluginCatalog& catalog);
+  // `bases`: MechanicalSystem's (null: the basis built for this run alone).
+  Simulation(const Scene& scene, PluginCatalog& catalog, BasisCache* bases = nullptr);
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 

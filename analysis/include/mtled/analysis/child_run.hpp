@@ -7,7 +7,8 @@
 
 namespace mtled {
 
-// How a child process ended (what its folder alone cannot tell: a signal, the caller's timeout, its memory).
+// How a run ended, as a child process or in the calling process (what its folder alone cannot tell: a signal, the
+// caller's timeout, its memory).
 struct RunOutcome {
   bool reused = false;  // an earlier successful run kept (--reuse); nothing ran
   int exit_code = -1;

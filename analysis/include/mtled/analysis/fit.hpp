@@ -1,7 +1,8 @@
 #pragma once
 // A fit (`mtled fit`, docs/calibration.md): scene parameters identified from measurements. The parameters are JSON
 // pointers into one or more experiments' scenes, each experiment a scene with a measured data file; every forward
-// run is a child `mtled run` (so an unstable one is recorded and the fit goes on). Four parts, one file each:
+// run is an `mtled run` of its own, in the fit's process (its mesh and meshless basis built once) or, through a
+// launcher, a child process (an unstable one is recorded either way and the fit goes on). Four parts, one file each:
 //   plan      (fit_plan.cpp)      read the fit file and every data file, check them all before anything runs;
 //   data      (fit_data.cpp)      what a run predicts at each datum (needle force at a depth, a set's reaction at a
 //                                 displacement, a marker's displacement), read back from the run's folder;
@@ -138,13 +139,28 @@ struct Result {
   double setup_seconds = 0.0;  // meshes written once
 };
 
-// The forward runs: each is a child `mtled run` of an experiment's scene with the parameters' values set.
+// One forward run, as `mtled run SCENE -o FOLDER --set ...` does it.
+struct ForwardRun {
+  std::filesystem::path scene;
+  std::vector<std::string> assignments;  // "/pointer=value", as --set: the experiment's own, its mesh, the parameters
+  std::filesystem::path folder;
+  int threads = 1;
+  std::vector<std::filesystem::path> plugin_paths;
+  std::string log_level;  // of the run's log, FOLDER/mtled.log
+  double timeout_s = 0.0;
+};
+// Runs one in the calling process and says how it ended (exit_code as `mtled run`'s): the command line's own run,
+// which this library does not link, handed in by whoever makes the Evaluator.
+using InProcessRunner = std::function<RunOutcome(const ForwardRun&)>;
+
+// The forward runs: each an experiment's scene with the parameters' values set, run by `in_process` or, with a
+// launcher (or no runner), as a child `mtled run`.
 class Evaluator {
  public:
-  // `executable`: the mtled that runs them (empty: this process's own executable).
+  // `executable`: the mtled a child run starts (empty: mtled's own, mtled_program).
   Evaluator(const Plan& plan, const std::filesystem::path& output,
             const std::vector<std::filesystem::path>& plugin_paths, std::string log_level,
-            std::filesystem::path executable = {});
+            InProcessRunner in_process = {}, std::filesystem::path executable = {});
   ~Evaluator();
   // Evaluates several parameter sets at once (each experiment of each set a run, concurrent_runs at a time).
   std::vector<Evaluation> evaluate(const std::vector<std::vector<double>>& points, int start,
@@ -154,14 +170,15 @@ class Evaluator {
   int threads() const { return threads_; }
 
  private:
-  std::vector<std::string> arguments(const Evaluation& e, std::size_t experiment, const std::filesystem::path& folder,
-                                     int threads) const;
+  ForwardRun forward_run(const Evaluation& e, std::size_t experiment, int threads) const;
+  RunOutcome run(const ForwardRun& run) const;
   void measure(Evaluation& e, std::span<const RunOutcome> outcomes);
   Evaluation finish(Evaluation e);
   const Plan& plan_;
   std::filesystem::path output_, executable_;
   std::vector<std::filesystem::path> plugin_paths_;
   std::string log_level_;
+  InProcessRunner in_process_;  // empty with a launcher: child runs
   std::unique_ptr<PluginCatalog> catalog_;
   std::vector<Evaluation> history_;
   int at_once_ = 1, threads_ = 1;                     // runs at once at most, and the threads they share
