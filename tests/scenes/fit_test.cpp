@@ -71,6 +71,19 @@ json compression_fit(const std::string& data) {
           {"threads", 2}};
 }
 
+// The compression cube's scene and data template written in `folder`, and `fit` (compression_fit's, edited) read.
+fit::Plan compression_plan(const fs::path& folder, const json& fit) {
+  write_text(folder / "cube.json", compression_cube().dump(2));
+  write_compression_template(folder / "compression.csv");
+  write_text(folder / "fit.json", fit.dump(2));
+  return fit::read(folder / "fit.json", {}, {plugin_dir()});
+}
+
+// Forward runs in this process, as mtled fit makes them, sharing `bases`.
+fit::InProcessRunner in_process(BasisCache& bases) {
+  return [&bases](const fit::ForwardRun& run) { return app::run_forward_in_process(run, bases); };
+}
+
 // Synthesizes data at the fit file's start values (noise seeded with `seed`) into folder/truth, then fits them from
 // `starts` (pointer=value overrides on the fit file) into folder/fit.
 json synthesize_then_fit(const fs::path& folder, const fs::path& fit_file, const std::string& template_data,
@@ -307,8 +320,6 @@ TEST(Fit, BobyqaFindsTheOptimumLevenbergMarquardtFindsFromTwoStarts) {
 // A forward run that goes unstable is recorded with its status and has no objective; the others are measured.
 TEST(Fit, AnUnstableForwardRunIsABadPointNotTheEnd) {
   const fs::path folder = scratch_dir("fit-unstable");
-  write_text(folder / "cube.json", compression_cube().dump(2));
-  write_compression_template(folder / "compression.csv");
   json fit = compression_fit("compression.csv");
   fit["parameters"][1] = {{"name", "time_step_factor"},
                           {"pointer", "/integrator/time_step_factor"},
@@ -318,11 +329,9 @@ TEST(Fit, AnUnstableForwardRunIsABadPointNotTheEnd) {
   fit["experiments"][0]["set"] = {{"/monitors/stable_step", "stop"}, {"/integrator/time_step_factor", 1.0}};
   fit["experiments"][0].erase("sigma_relative");
   fit["experiments"][0]["sigma"] = 5e-4;
-  write_text(folder / "fit.json", fit.dump(2));
-  const fit::Plan plan = fit::read(folder / "fit.json", {}, {plugin_dir()});
+  const fit::Plan plan = compression_plan(folder, fit);
   BasisCache bases;
-  fit::Evaluator evaluator(plan, folder / "out", {plugin_dir()}, "warn",
-                           [&](const fit::ForwardRun& run) { return app::run_forward_in_process(run, bases); });
+  fit::Evaluator evaluator(plan, folder / "out", {plugin_dir()}, "warn", in_process(bases));
   const auto evaluations = evaluator.evaluate({{722, 1.0}, {722, 8.0}}, 0, "start");
   ASSERT_EQ(evaluations.size(), 2u);
   EXPECT_EQ(evaluations[0].status, "ok") << evaluations[0].message;
@@ -337,18 +346,14 @@ TEST(Fit, AnUnstableForwardRunIsABadPointNotTheEnd) {
 // and predict what child `mtled run`s predict, to the last bit: the basis is the same computation, done once.
 TEST(Fit, InProcessRunsShareTheBasisAndPredictAsChildRunsDo) {
   const fs::path folder = scratch_dir("fit-in-process");
-  write_text(folder / "cube.json", compression_cube().dump(2));
-  write_compression_template(folder / "compression.csv");
   json file = compression_fit("compression.csv");
   file["threads"] = 1;
-  write_text(folder / "fit.json", file.dump(2));
-  const fit::Plan plan = fit::read(folder / "fit.json", {}, {plugin_dir()});
+  const fit::Plan plan = compression_plan(folder, file);
   const std::vector<std::vector<double>> points = {{722, -1.3}, {900, -1.0}, {500, -2.0}};
   fit::Evaluator children(plan, folder / "children", {plugin_dir()}, "warn", {}, MTLED_EXECUTABLE);
   const auto child = children.evaluate(points, 0, "start");
   BasisCache bases;
-  fit::Evaluator here(plan, folder / "here", {plugin_dir()}, "debug",
-                      [&](const fit::ForwardRun& run) { return app::run_forward_in_process(run, bases); });
+  fit::Evaluator here(plan, folder / "here", {plugin_dir()}, "debug", in_process(bases));
   const auto first = here.evaluate({points[0]}, 0, "start");  // builds the basis
   const auto rest = here.evaluate({points[1], points[2]}, 0, "jacobian");
   EXPECT_EQ(bases.size(), 1u);
@@ -368,15 +373,11 @@ TEST(Fit, InProcessRunsShareTheBasisAndPredictAsChildRunsDo) {
 // run's is; the fit goes on.
 TEST(Fit, AnInProcessRunPastTheTimeoutIsStoppedAndRecorded) {
   const fs::path folder = scratch_dir("fit-timeout");
-  write_text(folder / "cube.json", compression_cube().dump(2));
-  write_compression_template(folder / "compression.csv");
   json file = compression_fit("compression.csv");
   file["timeout_s"] = 0.05;  // the cube's run takes about a second
-  write_text(folder / "fit.json", file.dump(2));
-  const fit::Plan plan = fit::read(folder / "fit.json", {}, {plugin_dir()});
+  const fit::Plan plan = compression_plan(folder, file);
   BasisCache bases;
-  fit::Evaluator evaluator(plan, folder / "out", {plugin_dir()}, "warn",
-                           [&](const fit::ForwardRun& run) { return app::run_forward_in_process(run, bases); });
+  fit::Evaluator evaluator(plan, folder / "out", {plugin_dir()}, "warn", in_process(bases));
   const auto evaluations = evaluator.evaluate({{722, -1.3}}, 0, "start");
   ASSERT_EQ(evaluations.size(), 1u);
   EXPECT_EQ(evaluations[0].status, "timeout") << evaluations[0].message;
