@@ -97,7 +97,7 @@ void ConstraintSystem::build_block(Block& block, std::span<const double> mass,
 
 // Phi's rows for the block's rows, by row and by node (scaled by 1 / m there).
 void ConstraintSystem::fill_phi(Block& block, std::span<const double> mass) const {
-  const SupportRows& psi = discretisation_.interpolation();
+  const SupportRows& psi = discretisation_.basis()->interpolation;
   ConstraintBlock& phi_block = block.phi;
   const auto m = static_cast<Eigen::Index>(block.rows.size());
   phi_block.rows = m;

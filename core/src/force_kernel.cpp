@@ -79,7 +79,7 @@ Index ForceKernel::accumulate_forces(Index begin, Index end, double* f4, const s
   constexpr int kCapacity = StressBatch::kCapacity;
   constexpr Index kPointsBetweenProgress = 2048;  // about a tenth of a millisecond of the kernel
   const IntegrationPoints& points = discretisation_.points();
-  const IntegrationCorrection& correction = discretisation_.correction();
+  const IntegrationCorrection& correction = discretisation_.basis()->correction;
   Index first_bad = std::numeric_limits<Index>::max();
   Index since_progress = 0;
   StressBatch batch{};
@@ -189,7 +189,7 @@ void ForceKernel::scatter_stresses(std::span<const Mat3> weighted_stress, std::s
 
 void ForceKernel::scatter_stresses(std::span<const Mat3> weighted_stress, std::span<double> f,
                                    std::span<const PointRange> ranges) const {
-  const IntegrationCorrection& correction = discretisation_.correction();
+  const IntegrationCorrection& correction = discretisation_.basis()->correction;
   const std::span<const PointRange> slots = thread_slots(ranges);
   team().run([&](int thread) {
     AlignedVector<double>& local = thread_forces_[static_cast<std::size_t>(thread)];

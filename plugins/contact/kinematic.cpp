@@ -145,7 +145,7 @@ class KinematicNeedle final : public NeedleModel {
     for (std::size_t k = next_candidate_; k < candidates_.size(); ++k) {
       const Index n = candidates_[k];
       if (captured_[n]) continue;
-      model.interpolation().append_row(n, nodes);
+      model.basis()->interpolation.append_row(n, nodes);
       if (from_reference_ && advance < path_.axial(model.nodes()[n])) break;
     }
     for (std::size_t k = next_point_; k < shaft_candidates_.size(); ++k) {

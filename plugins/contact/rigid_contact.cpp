@@ -236,7 +236,7 @@ class RigidContactNeedle final : public NeedleModel {
   bool nodes_read(const LoadState&, const Discretisation& model, std::vector<Index>& nodes) const override {
     if (!punctured_ && !puncture_force_) tip_strain_.append_nodes_read(model, path_.tip(depth_), nodes);
     for (const Index n : candidates_)
-      if (!in_contact_[n]) model.interpolation().append_row(n, nodes);
+      if (!in_contact_[n]) model.basis()->interpolation.append_row(n, nodes);
     return true;
   }
 
@@ -445,7 +445,7 @@ class RigidContactNeedle final : public NeedleModel {
   // where no mass scaling lifts the small steps: central differences).
   double compliance(const Discretisation& model, Index node) const {
     double sum = 0.0;
-    const auto& rows = model.interpolation();
+    const auto& rows = model.basis()->interpolation;
     for (std::int64_t k = rows.offsets[node]; k < rows.offsets[node + 1]; ++k) {
       const auto i = static_cast<std::size_t>(rows.nodes[k]);
       const double stiffness = std::max(node_stiffness_[i], step_ > 0.0 ? node_mass_[i] / (step_ * step_) : 0.0);

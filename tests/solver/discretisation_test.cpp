@@ -383,7 +383,7 @@ TEST(Discretisation, ConsistentIntegrationBalancesAHomogeneousStressWithNodalBou
       for (Index v : face) area[v] += share;
     }
     std::vector<double> expected(u.size(), 0.0);
-    const SupportRows& psi = model->discretisation.interpolation();
+    const SupportRows& psi = model->discretisation.basis()->interpolation;
     for (Index k = 0; k < model->discretisation.node_count(); ++k) {
       for (std::int64_t e = psi.offsets[k]; e < psi.offsets[k + 1]; ++e) {
         const Vec3 term = psi.values[e] * (P * area[k]);

@@ -73,9 +73,9 @@ struct MeshlessBasis {
   std::shared_ptr<const ShapeFunctions> shape_functions;
   NodeCloud cloud;
   IntegrationPoints points;
-  GradientRows gradients;
-  SupportRows interpolation;
-  IntegrationCorrection correction;
+  GradientRows gradients;            // grad N_I at the integration points
+  SupportRows interpolation;         // N_I(X_J), one row per node J
+  IntegrationCorrection correction;  // consistent integration's (zero when off)
 };
 
 class Discretisation {
@@ -113,7 +113,7 @@ class Discretisation {
   Discretisation(const Discretisation&) = delete;
   Discretisation& operator=(const Discretisation&) = delete;
 
-  // ---- what was built
+  // ---- what was built (the interpolation rows N_I(X_J) and the integration correction: basis()->...)
   const std::shared_ptr<const MeshlessBasis>& basis() const { return basis_; }
   const TetMesh& mesh() const { return basis_->mesh; }  // the background tets, regions and named node sets
   Index node_count() const { return basis_->mesh.node_count(); }
@@ -121,9 +121,7 @@ class Discretisation {
   const NodeCloud& cloud() const { return basis_->cloud; }
   const IntegrationPoints& points() const { return basis_->points; }
   const Material& material(Index ip) const { return *materials_[basis_->points.material_index[ip]]; }
-  const GradientRows& gradients() const { return basis_->gradients; }         // grad N_I at the integration points
-  const SupportRows& interpolation() const { return basis_->interpolation; }  // N_I(X_J), one row per node J
-  const IntegrationCorrection& correction() const { return basis_->correction; }
+  const GradientRows& gradients() const { return basis_->gradients; }  // grad N_I at the integration points
   // Critical time step of each integration point for the unscaled density (Joldes, Wittek, Miller, IJNME 2012):
   // dt = 2 / (c sqrt(n sum_I |grad N_I|^2)), c = sqrt((lambda + 2 mu) / rho).
   const std::vector<double>& critical_time_steps() const { return critical_time_steps_; }
