@@ -2,16 +2,14 @@
 // the file format in docs/calibration.md). Everything is checked before the first forward run; with --synthesize the
 // command writes data made by the model at the start values, with seeded noise, instead of fitting.
 #include <fmt/ranges.h>
-#include <omp.h>
 
 #include <iostream>
 
 #include "commands.hpp"
+#include "in_process_run.hpp"
 #include "mtled/analysis/fit.hpp"
-#include "mtled/analysis/scene_sections.hpp"
 #include "mtled/io/output.hpp"
 #include "mtled/log.hpp"
-#include "scene_run.hpp"
 
 namespace mtled::app {
 
@@ -41,20 +39,11 @@ RunOutcome run_forward_in_process(const fit::ForwardRun& run, BasisCache& bases)
   {
     const ThreadLogFile log_file(run.folder / "mtled.log", run.log_level);
     try {
-      SceneDocument document = read_scene(run.scene, run.assignments);
-      PluginCatalog catalog(plugin_search_path(run.plugin_paths, scene_plugin_paths(document)));
-      const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
-      RunOptions options;
-      options.scene = {run.scene, run.assignments, run.plugin_paths};
-      options.output = run.folder;
-      options.threads = run.threads;
-      options.progress = false;
-      omp_set_num_threads(run.threads);  // this thread's (the other runs' threads set their own)
-      SceneRun scene_run(options, scene, catalog, run.threads, start, &bases);
-      std::vector<std::shared_ptr<StepMonitor>> observers;
-      if (run.timeout_s > 0.0) observers.push_back(std::make_shared<WallClockLimit>(start, run.timeout_s));
-      outcome.exit_code = scene_run.run(observers);
-      outcome.timed_out = scene_run.summary().value("status", "") == "timeout";
+      RunRequest request{run.folder, run.threads, run.plugin_paths, {}, &bases};
+      if (run.timeout_s > 0.0) request.observers.push_back(std::make_shared<WallClockLimit>(start, run.timeout_s));
+      const InProcessRun done({read_scene(run.scene, run.assignments), run.assignments}, request);
+      outcome.exit_code = done.exit_code();
+      outcome.timed_out = done.status() == "timeout";
     } catch (const InputError& e) {
       log().error("{}", e.what());
       outcome.exit_code = 2;

@@ -11,7 +11,6 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "mtled/analysis/fit.hpp"
 #include "mtled/io/run_outputs.hpp"
 #include "mtled/monitors/scene_monitors.hpp"
 
@@ -69,10 +68,5 @@ class SceneRun {
   std::vector<std::shared_ptr<OutputWriter>> writers_;
   std::vector<double> written_displacement_;
 };
-
-// A fit's forward run in this process, as a child `mtled run` does it: its log in its folder (mtled.log), stopped with
-// status "timeout" after run.timeout_s, the meshless basis of each mesh built once and shared through `bases`. How it
-// ended, exit_code as `mtled run`'s (2: invalid input).
-RunOutcome run_forward_in_process(const fit::ForwardRun& run, BasisCache& bases);
 
 }  // namespace mtled::app

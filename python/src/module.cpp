@@ -23,6 +23,10 @@ using namespace pybind11::literals;
 
 namespace mtled::python {
 
+using app::InProcessRun;
+using app::RunRequest;
+using app::SceneText;
+
 namespace {
 
 // Set by Ctrl-C while a run on the main thread holds SIGINT, or by request_interrupt(): every run in this process
@@ -168,7 +172,7 @@ void bind_scene(py::module_& m) {
       .def_property_readonly("json", [](const SceneText& scene) { return scene.document.root.dump(); })
       .def_property_readonly("name", [](const SceneText& scene) { return scene.document.name; })
       .def("problems", [](const SceneText& scene, const std::vector<fs::path>& plugin_paths) {
-        return where_and_message(scene_problems(scene.document, plugin_paths));
+        return where_and_message(app::scene_problems(scene.document, plugin_paths));
       });
 }
 

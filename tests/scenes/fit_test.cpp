@@ -11,8 +11,8 @@
 #include <map>
 #include <set>
 
+#include "in_process_run.hpp"
 #include "mtled/errors.hpp"
-#include "scene_run.hpp"
 #include "test_support.hpp"
 #include "xml_check.hpp"
 

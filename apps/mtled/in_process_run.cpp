@@ -5,7 +5,7 @@
 #include "commands.hpp"
 #include "mtled/analysis/scene_sections.hpp"
 
-namespace mtled::python {
+namespace mtled::app {
 
 namespace {
 
@@ -18,17 +18,17 @@ PluginCatalog scene_catalog(const SceneDocument& document, const std::vector<std
 InProcessRun::InProcessRun(const SceneText& scene, const RunRequest& request)
     : catalog_(scene_catalog(scene.document, request.plugin_paths)),
       scene_(validate_scene(scene.document, catalog_, run_scene_sections())) {
-  const auto wall_start = app::SceneRun::Clock::now();
-  app::RunOptions options;
+  const auto wall_start = SceneRun::Clock::now();
+  RunOptions options;
   options.scene.scene = scene.document.file.empty() ? std::filesystem::path(scene.document.name) : scene.document.file;
   options.scene.overrides = scene.assignments;
   options.scene.plugin_paths = request.plugin_paths;
   options.output = request.output;
-  options.threads = app::run_thread_count(request.threads);
+  options.threads = run_thread_count(request.threads);
   options.progress = false;
   omp_set_num_threads(options.threads);  // this thread's (a run on another thread sets its own)
-  run_ = std::make_unique<app::SceneRun>(options, scene_, catalog_, options.threads, wall_start);
-  run_->run(request.observers);
+  run_ = std::make_unique<SceneRun>(options, scene_, catalog_, options.threads, wall_start, request.bases);
+  exit_code_ = run_->run(request.observers);
 }
 
 InProcessRun::~InProcessRun() = default;
@@ -46,4 +46,4 @@ std::vector<Problem> scene_problems(const SceneDocument& document,
   return {};
 }
 
-}  // namespace mtled::python
+}  // namespace mtled::app
