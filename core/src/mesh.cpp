@@ -257,6 +257,27 @@ std::vector<std::array<Index, 3>> boundary_faces(const TetMesh& mesh) {
   return boundary;
 }
 
+Index remove_boundary_slivers(TetMesh& mesh) {
+  Index removed = 0;
+  for (;;) {
+    std::vector<int> boundary(mesh.tets.size(), 0);
+    for_each_face(mesh, [&](auto first, auto last) {
+      if (last - first == 1) ++boundary[static_cast<std::size_t>(first->tet)];
+    });
+    std::vector<std::array<Index, 4>> tets;
+    std::vector<Index> regions;
+    for (Index t = 0; t < mesh.tet_count(); ++t) {
+      if (boundary[static_cast<std::size_t>(t)] >= 2 && tet_radius_ratio(mesh, t) < kSliverRadiusRatio) continue;
+      tets.push_back(mesh.tets[t]);
+      regions.push_back(mesh.tet_region[t]);
+    }
+    if (tets.size() == mesh.tets.size() || tets.empty()) return removed;  // none left, or nothing but slivers
+    removed += mesh.tet_count() - static_cast<Index>(tets.size());
+    mesh.tets = std::move(tets);
+    mesh.tet_region = std::move(regions);
+  }
+}
+
 std::vector<char> surface_nodes(const TetMesh& mesh) {
   std::vector<char> surface(mesh.points.size(), 0);
   for (const auto& face : boundary_faces(mesh))

@@ -141,6 +141,39 @@ TEST(Mesh, RemoveUnusedNodesKeepsOrderAndSets) {
   check_mesh(mesh);
 }
 
+// A flat tet laid on two boundary triangles of the box's top face caps the surface as a mesher's sliver does on a
+// curved one (its radius ratio 0, two faces on the boundary): it goes, and only it; the box alone loses nothing.
+TEST(Mesh, RemoveBoundarySliversTakesTheCapAndNothingElse) {
+  TetMesh mesh = test::box_mesh(Vec3(1.0, 1.0, 1.0), 3, 3, 3);
+  const TetMesh original = mesh;
+  EXPECT_EQ(remove_boundary_slivers(mesh), 0);
+  std::vector<std::array<Index, 3>> top;
+  for (const auto& face : boundary_faces(mesh))
+    if (std::all_of(face.begin(), face.end(), [&](Index v) { return mesh.points[v].z() > 1.0 - 1e-12; }))
+      top.push_back(face);
+  // Two top triangles that share an edge (a, c): the cap is (a, b, c, d).
+  std::array<Index, 4> cap{};
+  bool found = false;
+  for (std::size_t i = 0; i < top.size() && !found; ++i)
+    for (std::size_t j = i + 1; j < top.size() && !found; ++j) {
+      std::vector<Index> shared, other;
+      for (Index v : top[i]) (std::count(top[j].begin(), top[j].end(), v) ? shared : other).push_back(v);
+      if (shared.size() != 2) continue;
+      const Index d =
+          *std::find_if(top[j].begin(), top[j].end(), [&](Index v) { return v != shared[0] && v != shared[1]; });
+      cap = {shared[0], other[0], shared[1], d};
+      found = true;
+    }
+  ASSERT_TRUE(found);
+  mesh.tets.push_back(cap);
+  mesh.tet_region.push_back(0);
+  EXPECT_LT(tet_radius_ratio(mesh, mesh.tet_count() - 1), kSliverRadiusRatio);
+  EXPECT_EQ(remove_boundary_slivers(mesh), 1);
+  EXPECT_EQ(mesh.tets, original.tets);
+  EXPECT_EQ(mesh.tet_region, original.tet_region);
+  EXPECT_EQ(mesh.node_sets, original.node_sets);
+}
+
 TEST(Mesh, SelectNodes) {
   const TetMesh mesh = test::box_mesh(Vec3(1, 1, 1), 3, 3, 3);
   const auto surface = surface_nodes(mesh);

@@ -64,6 +64,15 @@ MeshQuality mesh_quality(const TetMesh& mesh);
 // Tet t's radius ratio 3 r_in / r_circ: 1 for a regular tet, towards 0 for a sliver, 0 when flat.
 double tet_radius_ratio(const TetMesh& mesh, Index t);
 
+// A tet whose radius ratio is under this is a sliver: nearly flat, its volume no measure of the material's.
+constexpr double kSliverRadiusRatio = 0.1;
+
+// Removes the slivers that cap the boundary: tets under kSliverRadiusRatio with two or more faces on it, which a mesher
+// leaves on a curved surface (all four vertices on the surface, so no move of an inner vertex mends them). Each goes
+// with the volume it held, a mesh's smallest, and its inner faces become boundary; repeated until none is left (a
+// neighbour may become a cap). Node sets and regions keep their nodes; returns the number removed.
+Index remove_boundary_slivers(TetMesh& mesh);
+
 // Per-node mean length of the mesh edges that meet at the node.
 std::vector<double> mean_edge_length_at_nodes(const TetMesh& mesh);
 
