@@ -33,13 +33,13 @@ class WallClockLimit final : public StepMonitor {
 
 }  // namespace
 
-RunOutcome run_forward_in_process(const fit::ForwardRun& run, BasisCache& bases) {
+RunOutcome run_forward_in_process(const fit::ForwardRun& run, BasisCache* bases) {
   const auto start = SceneRun::Clock::now();
   RunOutcome outcome;
   {
     const ThreadLogFile log_file(run.folder / "mtled.log", run.log_level);
     try {
-      RunRequest request{run.folder, run.threads, run.plugin_paths, {}, &bases};
+      RunRequest request{run.folder, run.threads, run.plugin_paths, {}, bases};
       if (run.timeout_s > 0.0) request.observers.push_back(std::make_shared<WallClockLimit>(start, run.timeout_s));
       const InProcessRun done({read_scene(run.scene, run.assignments), run.assignments}, request);
       outcome.exit_code = done.exit_code();
@@ -71,9 +71,8 @@ int fit_command(const FitOptions& options) {
   // The forward runs go in this process, each experiment's meshless basis built by its first run (a launcher sends
   // them elsewhere instead, as child processes).
   BasisCache bases;
-  fit::InProcessRunner in_process = [&bases, reuse = options.reuse_mesh](const fit::ForwardRun& run) {
-    BasisCache own;  // --no-mesh-reuse: each run builds its own
-    return run_forward_in_process(run, reuse ? bases : own);
+  fit::InProcessRunner in_process = [shared = options.reuse_mesh ? &bases : nullptr](const fit::ForwardRun& run) {
+    return run_forward_in_process(run, shared);  // --no-mesh-reuse: each run builds its own
   };
   fit::Evaluator evaluator(plan, out.path(), options.plugin_paths, options.log_level, in_process);
   std::size_t data = 0;

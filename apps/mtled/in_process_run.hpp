@@ -55,8 +55,8 @@ std::vector<Problem> scene_problems(const SceneDocument& document,
                                     const std::vector<std::filesystem::path>& plugin_paths);
 
 // A fit's forward run in this process, as a child `mtled run` does it: its log in its folder (mtled.log), stopped with
-// status "timeout" after run.timeout_s, the meshless basis of each mesh built once and shared through `bases`. How it
-// ended, exit_code as `mtled run`'s (2: invalid input).
-RunOutcome run_forward_in_process(const fit::ForwardRun& run, BasisCache& bases);
+// status "timeout" after run.timeout_s, the meshless basis of each mesh built once and shared through `bases` (null:
+// the run builds its own). How it ended, exit_code as `mtled run`'s (2: invalid input).
+RunOutcome run_forward_in_process(const fit::ForwardRun& run, BasisCache* bases);
 
 }  // namespace mtled::app

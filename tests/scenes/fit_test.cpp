@@ -81,7 +81,7 @@ fit::Plan compression_plan(const fs::path& folder, const json& fit) {
 
 // Forward runs in this process, as mtled fit makes them, sharing `bases`.
 fit::InProcessRunner in_process(BasisCache& bases) {
-  return [&bases](const fit::ForwardRun& run) { return app::run_forward_in_process(run, bases); };
+  return [&bases](const fit::ForwardRun& run) { return app::run_forward_in_process(run, &bases); };
 }
 
 // Synthesizes data at the fit file's start values (noise seeded with `seed`) into folder/truth, then fits them from
