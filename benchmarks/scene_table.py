@@ -52,8 +52,10 @@ def result_of(folder, reaction_set):
     if reaction_set is None:
         rows = list(csv.DictReader(open(folder / "needle.csv")))
         return summary, f"{float(rows[-1]['force_N']):.4g} N at {1e3 * float(rows[-1]['depth_m']):.4g} mm"
-    force = summary["final_reactions_N"][reaction_set][2]
-    return summary, f"{abs(force):.4g} N on `{reaction_set}`"
+    reactions = summary["final_reactions_N"]
+    contact = reaction_set + "_contact"  # the surface that rolled onto the set's platen (its `platen` option)
+    force = reactions[reaction_set][2] + reactions.get(contact, [0.0, 0.0, 0.0])[2]
+    return summary, f"{abs(force):.4g} N on `{reaction_set}`" + (f" and `{contact}`" if contact in reactions else "")
 
 
 def measure(mtled, scene, threads, folder):

@@ -128,21 +128,22 @@ void InversionMonitor::check(const StepRecord& step) {
 
 std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, double radial,
                        const NodalConstraints* boundary) {
-  // A whole face held (a bonded platen): the free surface beside it creases, a fold only self-contact could follow.
+  // A whole face held (a bonded platen): the free surface beside it creases, a fold only self-contact could follow. A
+  // crease has no length scale: a finer cloud there resolves it sooner (docs/stability.md), so refining is no lever.
   constexpr std::size_t kFace = 8;
   if (boundary && boundary->nodes().size() > kFace)
     return fmt::format(
-        "the free surface creases where it meets the face boundary \"{}\" holds, a fold that only "
-        "self-contact (not modelled) could follow: refine the cloud toward that edge to delay it, or "
-        "stop the load before this state (docs/stability.md)",
+        "the free surface creases where it meets the face boundary \"{}\" holds, a fold of the surface onto itself "
+        "that only self-contact (not modelled) could follow, and which a finer cloud there resolves sooner, not "
+        "later: stop the load before this state (docs/stability.md)",
         boundary->name);
   if (boundary)
     return "a boundary condition pushes single nodes through the tissue: drive a surface or material points instead, "
            "or refine the mesh where it pushes";
   if (!needle)
     return "the material folds over itself (a crease, such as where a free surface meets a face a boundary condition "
-           "holds), which only self-contact (not modelled) could follow: refine the cloud there to delay it, or stop "
-           "the load before this state (docs/stability.md)";
+           "holds), which only self-contact (not modelled) could follow, and which a finer cloud resolves sooner, not "
+           "later: stop the load before this state (docs/stability.md)";
   if (advice.needle_drives_nodes)
     return "the needle drives single nodes: drive material points on the shaft's surface instead "
            "(/needle/driven \"shaft_surface\")";

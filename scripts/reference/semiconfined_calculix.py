@@ -17,8 +17,13 @@ Two discretisations:
   converge as h^0.45. (Reduced integration, CAX8R, fails to converge in Newton's method once the corner elements
   are below about 0.25 mm: hourglassing in the crushed corner.)
 
-Usage: semiconfined_calculix.py OUTPUT.csv [SIZE_MM ...] [--axisymmetric] [--check]   (needs gmsh and ccx;
---check asserts that the force grows with compression, ever faster)
+With --surface (axisymmetric only) it also prints, at each compression, the free side's profile under the top rim:
+its smallest meridional stretch (a free surface of a neo-Hookean solid compressed below a stretch of about 0.65
+creases: Hong, Zhao and Suo, Appl. Phys. Lett. 95, 111901, 2009) and how far it rose above the top platen's plane
+(the side rolling onto the platen, which this model, without contact, lets it pass through).
+
+Usage: semiconfined_calculix.py OUTPUT.csv [SIZE_MM ...] [--axisymmetric] [--surface] [--check]   (needs gmsh and
+ccx; --check asserts that the force grows with compression, ever faster)
 """
 import csv
 import math
@@ -35,6 +40,8 @@ FRACTIONS = (0.25, 0.5, 0.75, 1.0)  # of the stroke: 5, 10, 15, 20%
 # and BULK_SIZE. Halving BULK_SIZE and GROWTH (0.5 mm, 0.125) moves the forces at 5 to 15% by at most 1e-5 N
 # (at the corner size 0.05 mm; at 20% that mesh stops short in Newton's method).
 BULK_SIZE, GROWTH = 0.001, 0.25
+# A free surface of a neo-Hookean solid creases when compressed below this stretch (Hong, Zhao and Suo 2009).
+CREASE_STRETCH = 0.65
 # *STATIC of the compressions: first increment, whole step, smallest and largest increment (fractions of the stroke).
 COMPRESSION_STEP = "0.05, 1.0, 1e-6, 0.05"
 # CalculiX expands an axisymmetric model into a 2-degree sector: its reactions are 1/180 of the whole ring's.
@@ -113,7 +120,7 @@ def read_gmsh_inp(path, element_kind):
     return nodes, elements, sets
 
 
-def write_deck(path, nodes, elements, element_type, node_sets, boundary, step, time_points=None):
+def write_deck(path, nodes, elements, element_type, node_sets, boundary, step, time_points=None, print_side=False):
     """A CalculiX deck: the Ogden body, `boundary` (*BOUNDARY lines), the top set's total reaction printed."""
     with open(path, "w") as f:
         f.write("*NODE\n" + "".join(f"{n}, " + ", ".join(repr(c) for c in xyz) + "\n" for n, xyz in nodes.items()))
@@ -130,7 +137,10 @@ def write_deck(path, nodes, elements, element_type, node_sets, boundary, step, t
         if time_points:
             f.write("*TIME POINTS, NAME=T\n" + ", ".join(str(t) for t in time_points) + "\n")
         f.write(f"*STEP, NLGEOM, INC=1000\n*STATIC\n{step}\n*BOUNDARY\n{boundary}")
-        f.write("*NODE PRINT, NSET=TOP, TOTALS=ONLY" + (", TIME POINTS=T" if time_points else "") + "\nRF\n*END STEP\n")
+        f.write("*NODE PRINT, NSET=TOP, TOTALS=ONLY" + (", TIME POINTS=T" if time_points else "") + "\nRF\n")
+        if print_side:
+            f.write("*NODE PRINT, NSET=SIDE, TIME POINTS=T\nU\n")
+        f.write("*END STEP\n")
 
 
 def top_reactions(deck):
@@ -169,7 +179,31 @@ def counterclockwise(nodes, quad):
     return [quad[0], quad[3], quad[2], quad[1], quad[7], quad[6], quad[5], quad[4]]
 
 
-def run_axisymmetric(corner):
+def side_profile(deck, nodes, side):
+    """At each compression, from the side's displacements in the .dat: the free side's least meridional stretch (it
+    lies beside a singular rim, so it falls further as the corner is refined) and the side's nodes above the top
+    platen's plane (how many, how far at most, and from how far under the rim)."""
+    text = open(deck[:-4] + ".dat").read()
+    blocks = re.split(r"displacements \(vx,vy,vz\) for set SIDE and time\s+(\S+)", text)
+    side = sorted(side, key=lambda n: -nodes[n][1])
+    for time, block in zip(blocks[1::2], blocks[2::2]):
+        u = {}
+        for line in block.strip().splitlines():
+            values = line.split()
+            if len(values) < 3 or not values[0].isdigit():
+                break
+            u[int(values[0])] = (float(values[1]), float(values[2]))
+        moved = [(nodes[n][1], nodes[n][0] + u[n][0], nodes[n][1] + u[n][1]) for n in side]
+        least = min(math.hypot(a[1] - b[1], a[2] - b[2]) / (a[0] - b[0]) for a, b in zip(moved, moved[1:]))
+        platen = HEIGHT - float(time) * STROKE
+        above = [(z - platen, HEIGHT - z0) for z0, _, z in moved if z > platen + 1e-12]
+        print(f"  {100 * 0.2 * float(time):.0f}%: least meridional stretch of the side {least:.3f}"
+              f"{' (below ' + str(CREASE_STRETCH) + ')' if least < CREASE_STRETCH else ''}; {len(above)} side nodes "
+              f"above the top platen, by {1e3 * max(above, default=(0.0, 0.0))[0]:.3f} mm at most, from "
+              f"{1e3 * max((d for _, d in above), default=0.0):.2f} mm under the rim", flush=True)
+
+
+def run_axisymmetric(corner, surface=False):
     with tempfile.TemporaryDirectory() as folder:
         geo = GEO_AXISYMMETRIC.format(r=RADIUS, height=HEIGHT, bulk=BULK_SIZE, corner=corner, growth=GROWTH)
         nodes, elements, _ = read_gmsh_inp(gmsh_inp(folder, geo, 2), "CPS8")
@@ -178,10 +212,15 @@ def run_axisymmetric(corner):
         nodes = {n: xyz[:2] for n, xyz in nodes.items() if n in used}
         at = lambda axis, value: [n for n, xyz in nodes.items() if abs(xyz[axis] - value) < 1e-9]
         deck = os.path.join(folder, "compression.inp")
-        write_deck(deck, nodes, elements, "CAX8", {"BOTTOM": at(1, 0.0), "TOP": at(1, HEIGHT), "AXIS": at(0, 0.0)},
-                   f"BOTTOM, 1, 2\nAXIS, 1, 1\nTOP, 1, 1\nTOP, 2, 2, {-STROKE}\n", COMPRESSION_STEP,
-                   FRACTIONS)
-        return len(nodes), len(elements), compression_forces(deck, SECTOR, 1)
+        sets = {"BOTTOM": at(1, 0.0), "TOP": at(1, HEIGHT), "AXIS": at(0, 0.0)}
+        if surface:
+            sets["SIDE"] = at(0, RADIUS)
+        write_deck(deck, nodes, elements, "CAX8", sets, f"BOTTOM, 1, 2\nAXIS, 1, 1\nTOP, 1, 1\nTOP, 2, 2, {-STROKE}\n",
+                   COMPRESSION_STEP, FRACTIONS, print_side=surface)
+        forces = compression_forces(deck, SECTOR, 1)
+        if surface:
+            side_profile(deck, nodes, sets["SIDE"])
+        return len(nodes), len(elements), forces
 
 
 # One 20-node hexahedron (CalculiX's node order: 8 corners, then the 12 edge midpoints) for the uniaxial check.
@@ -230,13 +269,15 @@ def check_setup(axisymmetric):
 def main():
     output = sys.argv[1]
     flags = {a for a in sys.argv[2:] if a.startswith("--")}
-    check, axisymmetric = "--check" in flags, "--axisymmetric" in flags
+    check, axisymmetric, surface = "--check" in flags, "--axisymmetric" in flags, "--surface" in flags
+    if surface and not axisymmetric:
+        sys.exit("--surface reads the axisymmetric section's side: add --axisymmetric")
     sizes = [float(s) for s in sys.argv[2:] if not s.startswith("--")]
     sizes = sizes or ([0.4, 0.2, 0.1, 0.05] if axisymmetric else [3.0, 2.0, 1.5])
     check_setup(axisymmetric)
     rows = []
     for size in sizes:
-        nodes, elements, forces = (run_axisymmetric if axisymmetric else run_3d)(size * 1e-3)
+        nodes, elements, forces = run_axisymmetric(size * 1e-3, surface) if axisymmetric else run_3d(size * 1e-3)
         rows.append([size, nodes, elements] + forces)
         print(f"{'corner size' if axisymmetric else 'h'} = {size} mm: {nodes} nodes, {elements} "
               f"{'CAX8' if axisymmetric else 'C3D20R'}, top force at 5/10/15/20%: "
