@@ -96,8 +96,8 @@ void NodeSetBoundary::set_up_platen(const Discretisation& model, const std::vect
   if (normal.cwiseAbs().maxCoeff(&axis) > 1.0 - 1e-9) normal = Vec3::Unit(axis) * (normal[axis] > 0.0 ? 1.0 : -1.0);
   contact_.emplace(set_.name + "_contact", PlaneContact::Plane{centre, normal, final_displacement_}, platen_ == "stick",
                    kPlatenReleaseSteps, pointer);
-  log().info("boundary \"{}\": a platen, {} surface nodes may touch its plane ({})", set_.name,
-             contact_->setup(model, surface_node_list(model)), platen_);
+  const std::size_t candidates = contact_->setup(model, surface_node_list(model));
+  log().info("boundary \"{}\": a platen, {} surface nodes may touch its plane ({})", set_.name, candidates, platen_);
 }
 
 std::vector<NodalConstraints*> NodeSetBoundary::constraints() {
