@@ -57,16 +57,17 @@ Vec3 PlaneContact::on_plane(const Discretisation& model, Index node, const Vec3&
 
 void PlaneContact::release_pulled_nodes() {
   if (set_.reactions.size() != set_.size()) return;  // no step taken since the last change
-  std::vector<char> keep(set_.size(), 1);
   bool any = false;
   for (std::size_t k = 0; k < set_.size(); ++k) {
     Entry& entry = entries_[k];
     entry.tensile_steps = set_.reactions[k].dot(plane_.normal) < 0.0 ? entry.tensile_steps + 1 : 0;
-    if (entry.tensile_steps >= release_steps_) keep[k] = 0, any = true;
+    any = any || entry.tensile_steps >= release_steps_;
   }
-  if (!any) return;
+  if (!any) return;  // the usual step: nothing to rebuild
+  std::vector<char> keep(set_.size(), 1);
   std::vector<Entry> kept;
   for (std::size_t k = 0; k < set_.size(); ++k) {
+    keep[k] = entries_[k].tensile_steps < release_steps_;
     if (keep[k])
       kept.push_back(entries_[k]);
     else
