@@ -21,12 +21,7 @@ PlaneContact::PlaneContact(std::string name, const Plane& plane, bool stick, lon
 }
 
 std::size_t PlaneContact::setup(const Discretisation& model, const std::vector<Index>& candidates) {
-  Vec3 low = model.nodes()[0], high = low;
-  for (Index n = 1; n < model.node_count(); ++n) {
-    low = low.cwiseMin(model.nodes()[n]);
-    high = high.cwiseMax(model.nodes()[n]);
-  }
-  const double tolerance = 1e-6 * (high - low).norm();
+  const double tolerance = 1e-6 * model.cloud().length_scale;  // the node selectors' default tolerance
   for (Index n : candidates)
     if ((model.nodes()[n] - plane_.point).dot(plane_.normal) > tolerance) candidates_.push_back(n);
   in_contact_.assign(static_cast<std::size_t>(model.node_count()), 0);
