@@ -3,25 +3,24 @@
 // frame, so that results lie on the image they came from. Each meshed label becomes a region named after its
 // segment (or "label_N"), which the scene's materials choose by "region"; labels left out (background, fluid) are
 // outside the body.
-#include <fmt/format.h>
-
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Image_3.h>
 #include <CGAL/Labeled_mesh_domain_3.h>
+#include <CGAL/Mesh_3/initialize_triangulation_from_labeled_image.h>
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
-#include <CGAL/Mesh_3/initialize_triangulation_from_labeled_image.h>
 #include <CGAL/refine_mesh_3.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <map>
-#include <sstream>
-#include <cmath>
 #include <set>
+#include <sstream>
 #include <unordered_map>
 
 #include "mtled/errors.hpp"
@@ -29,6 +28,7 @@
 #include "mtled/io/label_image.hpp"
 #include "mtled/log.hpp"
 #include "mtled/plugin.hpp"
+#include "path_refinement.hpp"
 
 namespace mtled {
 
@@ -53,21 +53,29 @@ constexpr double kSliverBound = 12.0;
 // surface facets on its boundary (a facet between two regions takes the smaller). A small curved region needs it:
 // flat facets of size a inside a surface of curvature radius R cut off a fraction of its volume growing as (a/R)^2,
 // 0.96% of the brain phantom's stem (semi-axes 14 and 16 mm across) at the 2.45 mm that suits the rest of the brain.
+// Near the segment to refine along (in CGAL's frame, the image's axes through its origin: distances are physical),
+// the refined size where it is smaller.
 struct RegionSizes {
   double h;
   std::map<std::int32_t, double> by_label;
+  std::optional<std::pair<Vec3, Vec3>> segment;
+  RefinedSize refined;
 
   double size(std::int32_t label) const {
     const auto it = by_label.find(label);
     return it == by_label.end() ? h : std::min(h, it->second);
   }
-  double operator()(const Kernel::Point_3& /*point*/, int dimension, const Domain::Index& index) const {
-    if (dimension == 3) return size(boost::get<Domain::Subdomain_index>(index));
-    if (dimension == 2) {
+  double operator()(const Kernel::Point_3& point, int dimension, const Domain::Index& index) const {
+    double region = h;
+    if (dimension == 3) {
+      region = size(boost::get<Domain::Subdomain_index>(index));
+    } else if (dimension == 2) {
       const auto& patch = boost::get<Domain::Surface_patch_index>(index);
-      return std::min(size(patch.first), size(patch.second));
+      region = std::min(size(patch.first), size(patch.second));
     }
-    return h;
+    if (!segment) return region;
+    const Vec3 x(point.x(), point.y(), point.z());
+    return refined.at_distance(distance_to_segment(x, segment->first, segment->second), region);
   }
 };
 
@@ -187,10 +195,12 @@ class LabelMapMesh final : public MeshSource {
             "within 0.19 mm of the analytic one at its top); it shrinks small or sharp regions (a sphere of 7 voxels' "
             "radius by 9% of its volume), which the default keeps at the voxels' boundaries")
         .to<&Settings::smooth>();
+    declare_path_refinement<Settings>(d);
     d.example({{"path", "brain.nii.gz"}, {"target_nodes", 20000}});
   }
 
-  explicit LabelMapMesh(const Parameters& p) : p_(p), settings_(p.read<Settings>()) {
+  explicit LabelMapMesh(const Parameters& p)
+      : p_(p), settings_(p.read<Settings>()), segment_(read_refined_segment(settings_, p)) {
     if (settings_.mesh_size.has_value() == settings_.target_nodes.has_value())
       throw InputError(p.pointer("mesh_size"), "give exactly one of mesh_size (m) and target_nodes");
   }
@@ -205,18 +215,19 @@ class LabelMapMesh final : public MeshSource {
     CGAL::Random random(0);
     const CGAL::Image_3 cgal = cgal_image(image, meshed);
     const CGAL::Image_3 weights = settings_.smooth ? label_weights(cgal) : CGAL::Image_3();
-    const Domain domain = Domain::create_labeled_image_mesh_domain(
-        cgal, CGAL::parameters::weights = weights, CGAL::parameters::relative_error_bound = 1e-6,
-        CGAL::parameters::p_rng = &random);
-    double h = mesh_size(image, meshed, counts);
+    const Domain domain = Domain::create_labeled_image_mesh_domain(cgal, CGAL::parameters::weights = weights,
+                                                                   CGAL::parameters::relative_error_bound = 1e-6,
+                                                                   CGAL::parameters::p_rng = &random);
     const double distance = settings_.surface_distance.value_or(image.spacing().maxCoeff());
-    const auto sizes = region_sizes(image, meshed);
+    RegionSizes sizes{mesh_size(image, meshed, counts), region_sizes(image, meshed), refined_segment(image),
+                      read_refined_size(settings_)};
     if (settings_.target_nodes) {  // a trial refinement first, to size h by its count (N ~ 1 / h^3)
       const double target = static_cast<double>(*settings_.target_nodes);
-      h *= std::cbrt(static_cast<double>(generate(domain, cgal, {h, sizes}, distance, image, false).node_count()) /
-                     target);
+      sizes.h *=
+          std::cbrt(static_cast<double>(generate(domain, cgal, sizes, distance, image, false).node_count()) / target);
     }
-    TetMesh mesh = generate(domain, cgal, {h, sizes}, distance, image, true);
+    const double h = sizes.h;
+    TetMesh mesh = generate(domain, cgal, sizes, distance, image, true);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     mesh.statistics["meshing_time_s"] = seconds;
     mesh.statistics["mesh_size_m"] = h;
@@ -238,7 +249,19 @@ class LabelMapMesh final : public MeshSource {
     std::optional<double> surface_distance;
     std::optional<std::map<std::string, double>> region_mesh_size;
     bool smooth = false;
+    std::optional<Vec3> refine_from, refine_to;
+    std::optional<double> refine_ratio, refine_size;
+    double refine_distance = 0.0;
+    std::optional<double> refine_transition;
   };
+
+  // The segment to refine along in CGAL's frame (s with x = origin + R s, R the image axes' rotation: to_tet_mesh).
+  std::optional<std::pair<Vec3, Vec3>> refined_segment(const LabelImage& image) const {
+    if (!segment_) return std::nullopt;
+    const Mat3 rotation = image.axes * image.spacing().cwiseInverse().asDiagonal();
+    const auto to_cgal = [&](const Vec3& x) -> Vec3 { return rotation.transpose() * (x - image.origin); };
+    return std::make_pair(to_cgal(segment_->first), to_cgal(segment_->second));
+  }
 
   std::set<std::int32_t> meshed_labels(const LabelImage& image, const std::map<std::int32_t, std::int64_t>& counts) const {
     std::set<std::int32_t> meshed;
@@ -350,6 +373,7 @@ class LabelMapMesh final : public MeshSource {
 
   Parameters p_;
   Settings settings_;
+  std::optional<std::pair<Vec3, Vec3>> segment_;
 };
 
 // The complex's cells as tets in the image's frame: CGAL meshes in voxel-size-scaled index space, x = origin + R s

@@ -1,9 +1,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "generated_mesh_checks.hpp"
+#include "mesh_spacing.hpp"
 #include "mtled/interfaces/mesh_source.hpp"
 #include "test_support.hpp"
 
@@ -13,24 +15,6 @@ namespace {
 TetMesh load(const std::string& generator, const json& block) {
   auto source = make<MeshSource>(generator, block);
   return kernel_ready(source->load(MeshContext{}));
-}
-
-// The mean edge length at the nodes where `where(x)` holds, and how many nodes that is.
-struct Spacing {
-  double mean = 0.0;
-  int nodes = 0;
-};
-template <class Where>
-Spacing spacing_where(const TetMesh& mesh, Where&& where) {
-  const std::vector<double> spacing = mean_edge_length_at_nodes(mesh);
-  Spacing s;
-  for (std::size_t n = 0; n < mesh.points.size(); ++n)
-    if (where(mesh.points[n])) {
-      s.mean += spacing[n];
-      ++s.nodes;
-    }
-  if (s.nodes > 0) s.mean /= s.nodes;
-  return s;
 }
 
 TEST(GmshCylinder, NodeCountVolumeAndFaces) {
@@ -88,6 +72,40 @@ TEST(GmshCylinder, RefinesAlongASegment) {
   auto half = make<MeshSource>("cylinder", {{"radius", 0.015}, {"height", 0.017}, {"refine_from", {0.0, 0.0, 0.017}}});
   const Problem problem = input_error([&] { half->load(MeshContext{}); });
   EXPECT_EQ(problem.where, "/test/refine_to");
+}
+
+TEST(GmshCylinder, AnAbsoluteRefineSizeIsTheSameWhateverTheMeshSize) {
+  // refine_size 0.8 mm along the axis at mesh sizes 2 and 3 mm: the spacing by the axis is what 0.8 mm gives (0.4
+  // of what 2 mm gives far from it), the same on both, while the bulk keeps its own size.
+  const auto from_axis = [](const Vec3& x) { return std::hypot(x[0], x[1]); };
+  std::vector<double> near, far;
+  for (const double h : {0.002, 0.003}) {
+    const TetMesh mesh = load("cylinder", {{"radius", 0.015},
+                                           {"height", 0.017},
+                                           {"mesh_size", h},
+                                           {"refine_from", {0.0, 0.0, 0.017}},
+                                           {"refine_to", {0.0, 0.0, 0.002}},
+                                           {"refine_size", 0.0008},
+                                           {"refine_distance", 0.002}});
+    const Spacing by_axis =
+        spacing_where(mesh, [&](const Vec3& x) { return from_axis(x) < 0.0015 && x[2] > 0.003 && x[2] < 0.016; });
+    ASSERT_GT(by_axis.nodes, 20);
+    near.push_back(by_axis.mean);
+    far.push_back(spacing_where(mesh, [&](const Vec3& x) { return from_axis(x) > 0.009; }).mean);
+  }
+  std::printf("by the axis %.3f and %.3f mm, far %.3f and %.3f mm\n", 1e3 * near[0], 1e3 * near[1], 1e3 * far[0],
+              1e3 * far[1]);
+  EXPECT_NEAR(near[1] / near[0], 1.0, 0.12);  // Gmsh's spread, as above
+  EXPECT_NEAR(near[0] / far[0], 0.4, 0.12);
+  EXPECT_NEAR(far[1] / far[0], 1.5, 0.3);
+  // A ratio and a size at once is refused, naming the size.
+  auto both = make<MeshSource>("cylinder", {{"radius", 0.015},
+                                            {"height", 0.017},
+                                            {"refine_from", {0.0, 0.0, 0.017}},
+                                            {"refine_to", {0.0, 0.0, 0.002}},
+                                            {"refine_ratio", 0.5},
+                                            {"refine_size", 0.0008}});
+  EXPECT_EQ(input_error([&] { both->load(MeshContext{}); }).where, "/test/refine_size");
 }
 
 TEST(GmshCylinder, RefinesAlongTheRims) {

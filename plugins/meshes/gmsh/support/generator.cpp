@@ -65,28 +65,19 @@ struct Generation {
 };
 
 // Finer mesh near a segment (a needle's path) and/or a shape's rims (where bonded faces meet a free side, the
-// stress is singular): size ratio x h within `distance` of them, growing linearly to h over `transition`.
+// stress is singular).
 struct Refinement {
   std::optional<std::pair<Vec3, Vec3>> segment;
   bool rims = false;
-  double ratio, distance, transition;
+  RefinedSize size;
 };
 
 std::optional<Refinement> read_refinement(const MeshSizeSettings& size, const Parameters& p,
                                           const GeneratorRequest& request) {
-  const auto& from = size.refine_from;
-  const auto& to = size.refine_to;
+  auto segment = read_refined_segment(size, p);
   const bool rims = request.rim_curves && size.refine_rims;
-  if (!from && !to && !rims) return std::nullopt;
-  if (static_cast<bool>(from) != static_cast<bool>(to))
-    throw InputError(p.pointer(from ? "refine_to" : "refine_from"),
-                     "refine_from and refine_to go together: give both ends of the segment to refine along (for a "
-                     "needle, its entry point and its tip at the final depth)");
-  const double distance = size.refine_distance;
-  Refinement refinement{std::nullopt, rims, size.refine_ratio, distance,
-                        size.refine_transition.value_or(2.0 * distance)};
-  if (from) refinement.segment = std::make_pair(*from, *to);
-  return refinement;
+  if (!segment && !rims) return std::nullopt;
+  return Refinement{std::move(segment), rims, read_refined_size(size)};
 }
 
 class Generator {
@@ -105,7 +96,7 @@ class Generator {
       if (meshed_) gmsh::model::mesh::clear();
       gmsh::option::setNumber("Mesh.MeshSizeMax", mesh_size);
       if (refinement_) {
-        gmsh::model::mesh::field::setNumber(kThresholdField, "SizeMin", refinement_->ratio * mesh_size);
+        gmsh::model::mesh::field::setNumber(kThresholdField, "SizeMin", refinement_->size.fine(mesh_size));
         gmsh::model::mesh::field::setNumber(kThresholdField, "SizeMax", mesh_size);
       }
       gmsh::model::mesh::generate(3);
@@ -142,7 +133,7 @@ class Generator {
   // field, which a Threshold field turns into sizes; the free points are meshed as lone vertices, which
   // remove_unused_nodes drops.
   static void add_refinement_field(const Refinement& r, const GeneratorRequest& request) {
-    const double spacing = 0.25 * r.distance;
+    const double spacing = 0.25 * r.size.distance;
     std::vector<double> points, curves;
     if (r.segment) {
       const auto& [from, to] = *r.segment;
@@ -170,8 +161,8 @@ class Generator {
     }
     gmsh::model::mesh::field::add("Threshold", kThresholdField);
     gmsh::model::mesh::field::setNumber(kThresholdField, "InField", kDistanceField);
-    gmsh::model::mesh::field::setNumber(kThresholdField, "DistMin", r.distance);
-    gmsh::model::mesh::field::setNumber(kThresholdField, "DistMax", r.distance + r.transition);
+    gmsh::model::mesh::field::setNumber(kThresholdField, "DistMin", r.size.distance);
+    gmsh::model::mesh::field::setNumber(kThresholdField, "DistMax", r.size.distance + r.size.transition);
     gmsh::model::mesh::field::setAsBackgroundMesh(kThresholdField);
     // Gmsh carries the sizes of a face's boundary curves into the face by default: the fine rims would make
     // the whole top and bottom faces fine. Only the field decides.
@@ -329,37 +320,7 @@ void declare_mesh_size(ComponentDeclaration& declaration, long default_target_no
           "(deterministic; moves that would leave a tet with under 1% of its volume are shortened), giving an "
           "irregular, sliver-rich cloud; 0 keeps Gmsh's nodes")
       .to<&MeshSizeSettings::jitter>();
-  declaration.vector3("refine_from")
-      .optional()
-      .unit("m")
-      .doc(
-          "with refine_to: refine the mesh along the segment between them (for a needle: its entry point and its tip "
-          "at the final depth); target_nodes then counts the refined mesh's nodes")
-      .to<&MeshSizeSettings::refine_from>();
-  declaration.vector3("refine_to")
-      .optional()
-      .unit("m")
-      .doc("the other end of the segment to refine along")
-      .to<&MeshSizeSettings::refine_to>();
-  declaration.number("refine_ratio")
-      .defaults(0.4)
-      .greater_than(0.0)
-      .at_most(1.0)
-      .unit("1")
-      .doc("mesh size near the segment (and the rims, with refine_rims) as a fraction of the size elsewhere")
-      .to<&MeshSizeSettings::refine_ratio>();
-  declaration.number("refine_distance")
-      .defaults(0.002)
-      .positive()
-      .unit("m")
-      .doc("distance from the segment (and the rims) within which the refined size holds")
-      .to<&MeshSizeSettings::refine_distance>();
-  declaration.number("refine_transition")
-      .optional()
-      .positive()
-      .unit("m")
-      .doc("distance beyond refine_distance over which the size grows back (default: 2 x refine_distance)")
-      .to<&MeshSizeSettings::refine_transition>();
+  declare_path_refinement<MeshSizeSettings>(declaration, " (and the rims, with refine_rims)");
 }
 
 void declare_rim_refinement(ComponentDeclaration& declaration) {
@@ -367,7 +328,8 @@ void declare_rim_refinement(ComponentDeclaration& declaration) {
       .defaults(false)
       .doc(
           "refine the mesh along the rims, the circular edges where the top and bottom faces meet the side (with "
-          "refine_ratio, refine_distance and refine_transition): where bonded faces meet a free side the stress is "
+          "refine_ratio or refine_size, refine_distance and refine_transition): where bonded faces meet a free side "
+          "the stress is "
           "singular, and a cloud graded there gets the platen force closer with a fifth of the nodes of a uniform "
           "one (docs/validation.md); "
           "target_nodes then counts the refined mesh's nodes")

@@ -8,12 +8,13 @@
 
 #include "mtled/mesh.hpp"
 #include "mtled/parameters.hpp"
+#include "path_refinement.hpp"
 #include "support/gmsh_model.hpp"
 
 namespace mtled {
 
 // Declares "target_nodes" (default `default_target_nodes`), "mesh_size", "jitter" and the refinement along a
-// segment (refine_from, refine_to, refine_ratio, refine_distance, refine_transition) on a generator.
+// segment (path_refinement.hpp) on a generator.
 void declare_mesh_size(ComponentDeclaration& declaration, long default_target_nodes);
 
 // Declares "refine_rims" on a generator that sets GeneratorRequest::rim_curves.
@@ -25,7 +26,8 @@ struct MeshSizeSettings {
   std::optional<double> mesh_size;
   double jitter = 0.0;
   std::optional<Vec3> refine_from, refine_to;
-  double refine_ratio = 0.0, refine_distance = 0.0;
+  std::optional<double> refine_ratio, refine_size;
+  double refine_distance = 0.0;
   std::optional<double> refine_transition;
   bool refine_rims = false;  // false where the generator does not declare it
 };
