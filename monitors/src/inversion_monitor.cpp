@@ -154,7 +154,9 @@ std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, dou
         "the needle's drag has sheared the tissue beside its shaft past what the cloud can follow; "
         "refining the cloud along the path makes it fold earlier, not later (docs/stability.md){}. {}, "
         "or stop the insertion before this depth (/needle/depth)",
-        advice.refined_along ? ": coarsen the refinement (/mesh/refine_ratio closer to 1)" : "",
+        !advice.refined_along    ? ""
+        : advice.refined_to_size ? ": coarsen the refinement (a larger /mesh/refine_size)"
+                                 : ": coarsen the refinement (/mesh/refine_ratio closer to 1)",
         advice.drag_limited ? "Lower the drag limit (/needle/drag_limit; docs/needle-models.md)"
                             : "Let the tissue slip along the shaft once dragged a few millimetres (/needle/drag_limit, "
                               "e.g. 0.006 m; docs/needle-models.md)");

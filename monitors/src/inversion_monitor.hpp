@@ -24,7 +24,8 @@ namespace mtled {
 // What the message of a fold may advise, from what the scene already does: never a lever it already uses.
 struct FoldAdvice {
   bool needle_drives_nodes = false;  // the kinematic needle drives nodes, not material points on the shaft's surface
-  bool refined_along = false;  // the mesh source refines the cloud along a segment (a Gmsh generator's refine_from)
+  bool refined_along = false;        // the mesh source refines the cloud along a segment (refine_from)
+  bool refined_to_size = false;      // ... to an absolute size (refine_size) rather than a ratio
   bool drag_limited = false;   // the kinematic needle's drag is limited (/needle/drag_limit)
 };
 

@@ -29,7 +29,8 @@ FoldAdvice fold_advice(const Scene& scene) {
     advice.needle_drives_nodes = needle.has("driven") && needle.string("driven") != "shaft_surface";
     advice.drag_limited = needle.has("drag_limit");
   }
-  advice.refined_along = scene.mesh.parameters.has("refine_from");  // the Gmsh generators' refinement
+  advice.refined_along = scene.mesh.parameters.has("refine_from");  // the mesh generators' refinement
+  advice.refined_to_size = scene.mesh.parameters.has("refine_size");
   return advice;
 }
 
