@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "mtled/errors.hpp"
+#include "mtled/log.hpp"
 #include "mtled/parameters.hpp"
 
 namespace mtled {
@@ -96,6 +97,15 @@ std::optional<std::pair<Vec3, Vec3>> read_refined_segment(const Settings& settin
                      "give refine_ratio (a fraction of mesh_size) or refine_size (metres), not both");
   if (!from) return std::nullopt;
   return std::make_pair(*from, *to);
+}
+
+// A refined size with nothing to refine along (no segment, and no rims where `rims` is false) changes nothing: said,
+// not refused, since a scene switches its refinement off by dropping the segment or the rims and may keep the size.
+template <class Settings>
+void warn_if_refining_nothing(const Settings& settings, const Parameters& p, bool rims) {
+  if (settings.refine_from || rims || (!settings.refine_ratio && !settings.refine_size)) return;
+  log().warn("{} is given but refines nothing: refine_from and refine_to name the segment to refine along",
+             p.pointer(settings.refine_size ? "refine_size" : "refine_ratio"));
 }
 
 template <class Settings>

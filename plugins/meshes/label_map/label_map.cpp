@@ -203,6 +203,7 @@ class LabelMapMesh final : public MeshSource {
       : p_(p), settings_(p.read<Settings>()), segment_(read_refined_segment(settings_, p)) {
     if (settings_.mesh_size.has_value() == settings_.target_nodes.has_value())
       throw InputError(p.pointer("mesh_size"), "give exactly one of mesh_size (m) and target_nodes");
+    warn_if_refining_nothing(settings_, p, false);
   }
 
   TetMesh load(const MeshContext& context) override {

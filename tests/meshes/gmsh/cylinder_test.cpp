@@ -106,6 +106,11 @@ TEST(GmshCylinder, AnAbsoluteRefineSizeIsTheSameWhateverTheMeshSize) {
                                             {"refine_ratio", 0.5},
                                             {"refine_size", 0.0008}});
   EXPECT_EQ(input_error([&] { both->load(MeshContext{}); }).where, "/test/refine_size");
+  // A size with no segment to refine along refines nothing: said, not refused.
+  testing::internal::CaptureStderr();
+  load("cylinder", {{"radius", 0.015}, {"height", 0.017}, {"mesh_size", 0.004}, {"refine_size", 0.0008}});
+  const std::string said = testing::internal::GetCapturedStderr();
+  EXPECT_NE(said.find("/test/refine_size is given but refines nothing"), std::string::npos) << said;
 }
 
 TEST(GmshCylinder, RefinesAlongTheRims) {

@@ -76,6 +76,7 @@ std::optional<Refinement> read_refinement(const MeshSizeSettings& size, const Pa
                                           const GeneratorRequest& request) {
   auto segment = read_refined_segment(size, p);
   const bool rims = request.rim_curves && size.refine_rims;
+  warn_if_refining_nothing(size, p, rims);
   if (!segment && !rims) return std::nullopt;
   return Refinement{std::move(segment), rims, read_refined_size(size)};
 }
