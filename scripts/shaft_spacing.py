@@ -12,25 +12,15 @@ import argparse
 
 import numpy as np
 
+from abaqus_inp import read_inp as read_abaqus
+
 
 def read_inp(path):
-    """Nodes (by id) and C3D4 tets of an Abaqus file as mtled writes it."""
-    nodes, tets, section = {}, [], None
-    with open(path) as f:
-        for line in f:
-            if line.startswith("*"):
-                keyword = line.split(",")[0].strip().upper()
-                section = keyword if keyword in ("*NODE", "*ELEMENT") else None
-                continue
-            fields = [v for v in line.split(",") if v.strip()]
-            if section == "*NODE":
-                nodes[int(fields[0])] = [float(v) for v in fields[1:4]]
-            elif section == "*ELEMENT":
-                tets.append([int(v) for v in fields[1:5]])
-    ids = np.array(sorted(nodes))
-    points = np.array([nodes[i] for i in ids])
+    """Node coordinates and the C3D4 tets (rows into them) of a mesh `mtled mesh` wrote."""
+    nodes, tets, _ = read_abaqus(path, "C3D4")
+    ids = sorted(nodes)
     position = {node: row for row, node in enumerate(ids)}
-    return points, np.array([[position[n] for n in tet] for tet in tets])
+    return np.array([nodes[i] for i in ids]), np.array([[position[n] for n in tet] for tet in tets])
 
 
 def shaft_spacing(points, tets, entry, direction, depth, radius):

@@ -33,6 +33,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))  # scripts/
+from abaqus_inp import read_inp  # noqa: E402
+
 MU, ALPHA, D = 722.0, -1.3, 5.57738e-5  # the scene's Ogden parameters (Pa, 1, 1/Pa)
 RADIUS, HEIGHT, STROKE = 0.015, 0.017, 0.0034  # m: 20% nominal compression
 FRACTIONS = (0.25, 0.5, 0.75, 1.0)  # of the stroke: 5, 10, 15, 20%
@@ -80,46 +83,6 @@ def gmsh_inp(folder, geo_text, dimension):
     return inp
 
 
-NODES_PER_ELEMENT = {"C3D20": 20, "CPS8": 8}
-
-
-def read_gmsh_inp(path, element_kind):
-    """Nodes ({id: coordinates}), the elements of `element_kind` (C3D20, CPS8) and the node sets of Gmsh's
-    Abaqus export; other elements of the same dimension (a triangle left by the recombination) are refused."""
-    nodes, elements, sets, pending = {}, [], {}, []
-    section, name = None, None
-    for line in open(path):
-        line = line.strip()
-        if not line or line.startswith("**"):
-            continue
-        if line.startswith("*"):
-            keyword = line.upper()
-            section, name = None, None
-            if keyword.startswith("*NODE") and not keyword.startswith("*NODE PRINT"):
-                section = "node"
-            elif keyword.startswith("*ELEMENT"):
-                kind = re.search(r"TYPE=(\w+)", keyword).group(1)
-                if kind == element_kind:
-                    section = "element"
-                elif kind[:3] == element_kind[:3]:
-                    sys.exit(f"{path}: Gmsh wrote {kind} elements, expected only {element_kind}")
-            elif keyword.startswith("*NSET"):
-                section, name = "nset", re.search(r"NSET=([^,\s]+)", line, re.I).group(1).lower()
-                sets[name] = []
-            continue
-        values = [v.strip() for v in line.split(",") if v.strip()]
-        if section == "node":
-            nodes[int(values[0])] = tuple(float(v) for v in values[1:])
-        elif section == "element":  # an element's line may continue on the next (Gmsh writes 15 numbers a line)
-            pending.extend(int(v) for v in values)
-            if len(pending) == 1 + NODES_PER_ELEMENT[element_kind]:
-                elements.append(pending[1:])
-                pending = []
-        elif section == "nset":
-            sets[name].extend(int(v) for v in values)
-    return nodes, elements, sets
-
-
 def write_deck(path, nodes, elements, element_type, node_sets, boundary, step, time_points=None, print_side=False):
     """A CalculiX deck: the Ogden body, `boundary` (*BOUNDARY lines), the top set's total reaction printed."""
     with open(path, "w") as f:
@@ -164,7 +127,7 @@ def compression_forces(deck, scale, component):
 def run_3d(h):
     with tempfile.TemporaryDirectory() as folder:
         geo = GEO_3D.format(r=RADIUS, h=h, height=HEIGHT, layers=max(2, round(HEIGHT / h)))
-        nodes, elements, sets = read_gmsh_inp(gmsh_inp(folder, geo, 3), "C3D20")
+        nodes, elements, sets = read_inp(gmsh_inp(folder, geo, 3), "C3D20")
         deck = os.path.join(folder, "compression.inp")
         write_deck(deck, nodes, elements, "C3D20R", {"BOTTOM": sets["bottom"], "TOP": sets["top"]},
                    f"BOTTOM, 1, 3\nTOP, 1, 2\nTOP, 3, 3, {-STROKE}\n", COMPRESSION_STEP, FRACTIONS)
@@ -206,7 +169,7 @@ def side_profile(deck, nodes, side):
 def run_axisymmetric(corner, surface=False):
     with tempfile.TemporaryDirectory() as folder:
         geo = GEO_AXISYMMETRIC.format(r=RADIUS, height=HEIGHT, bulk=BULK_SIZE, corner=corner, growth=GROWTH)
-        nodes, elements, _ = read_gmsh_inp(gmsh_inp(folder, geo, 2), "CPS8")
+        nodes, elements, _ = read_inp(gmsh_inp(folder, geo, 2), "CPS8")
         elements = [counterclockwise(nodes, quad) for quad in elements]
         used = {n for quad in elements for n in quad}
         nodes = {n: xyz[:2] for n, xyz in nodes.items() if n in used}
@@ -257,7 +220,6 @@ def check_setup(axisymmetric):
     """The cross-check of the setup (element, Ogden parameters, reaction totals, the axisymmetric sector's
     scale): the homogeneous uniaxial case against its closed form (scripts/uniaxial_exact.py; the scene
     uniaxial_cube_ogden.json's -649.5651 Pa)."""
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
     from uniaxial_exact import top_force
     exact = top_force(MU, ALPHA, D, 0.8, 0.01) / 1e-4
     calculix = uniaxial(axisymmetric)

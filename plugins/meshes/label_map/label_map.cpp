@@ -79,6 +79,9 @@ struct RegionSizes {
   }
 };
 
+// CGAL meshes in the image's voxel-size-scaled index space: x = origin + R s, with R the rotation of the image's axes.
+Mat3 cgal_rotation(const LabelImage& image) { return image.axes * image.spacing().cwiseInverse().asDiagonal(); }
+
 // The image as CGAL's meshing sees it: one int32 per voxel, axis-aligned with the voxel sizes (m); labels not
 // meshed are 0 (outside).
 CGAL::Image_3 cgal_image(const LabelImage& image, const std::set<std::int32_t>& meshed) {
@@ -256,10 +259,10 @@ class LabelMapMesh final : public MeshSource {
     std::optional<double> refine_transition;
   };
 
-  // The segment to refine along in CGAL's frame (s with x = origin + R s, R the image axes' rotation: to_tet_mesh).
+  // The segment to refine along in CGAL's frame (cgal_rotation).
   std::optional<std::pair<Vec3, Vec3>> refined_segment(const LabelImage& image) const {
     if (!segment_) return std::nullopt;
-    const Mat3 rotation = image.axes * image.spacing().cwiseInverse().asDiagonal();
+    const Mat3 rotation = cgal_rotation(image);
     const auto to_cgal = [&](const Vec3& x) -> Vec3 { return rotation.transpose() * (x - image.origin); };
     return std::make_pair(to_cgal(segment_->first), to_cgal(segment_->second));
   }
@@ -377,14 +380,12 @@ class LabelMapMesh final : public MeshSource {
   std::optional<std::pair<Vec3, Vec3>> segment_;
 };
 
-// The complex's cells as tets in the image's frame: CGAL meshes in voxel-size-scaled index space, x = origin + R s
-// with R the axes' rotation.
+// The complex's cells as tets in the image's frame (cgal_rotation).
 TetMesh LabelMapMesh::to_tet_mesh(const Complex& complex, const LabelImage& image) {
   TetMesh mesh;
   mesh.source = image.source;
   mesh.coordinate_system = image.space;
-  const Vec3 spacing = image.spacing();
-  const Mat3 rotation = image.axes * spacing.cwiseInverse().asDiagonal();
+  const Mat3 rotation = cgal_rotation(image);
   std::unordered_map<const void*, Index> index;
   std::map<int, Index> regions;  // numbered in label order, so that a region's number does not depend on the mesh
   for (auto cell = complex.cells_in_complex_begin(); cell != complex.cells_in_complex_end(); ++cell)
