@@ -15,10 +15,6 @@ namespace mtled {
 
 namespace {
 
-// 4-point rule on a tet, exact for quadratics: barycentric (a, b, b, b) and permutations, weight V/4.
-constexpr double kQuadA = 0.5854101966249685;
-constexpr double kQuadB = 0.1381966011250105;
-
 std::string point_text(const Vec3& x) { return fmt::format("({:.6g}, {:.6g}, {:.6g}) m", x[0], x[1], x[2]); }
 
 struct RowFailure {
@@ -146,19 +142,15 @@ void build_integration_points(MeshlessBasis& b, int points_per_tet, const std::v
   }
   std::partial_sum(b.points.group_offsets.begin(), b.points.group_offsets.end(), b.points.group_offsets.begin());
   for (const Index t : order) {
-    const auto& tet = b.mesh.tets[t];
     const double volume = tet_volume(b.mesh, t);
-    const Vec3* v[4] = {&b.mesh.points[tet[0]], &b.mesh.points[tet[1]], &b.mesh.points[tet[2]], &b.mesh.points[tet[3]]};
     const auto material = static_cast<std::uint16_t>(b.mesh.tet_region[t]);
     if (points_per_tet == 1) {
-      b.points.positions.push_back((*v[0] + *v[1] + *v[2] + *v[3]) / 4.0);
+      b.points.positions.push_back(tet_centroid(b.mesh, t));
       b.points.weights.push_back(volume);
       b.points.tets.push_back(t);
       b.points.material_index.push_back(material);
     } else {
-      for (int k = 0; k < 4; ++k) {
-        Vec3 x = Vec3::Zero();
-        for (int j = 0; j < 4; ++j) x += (j == k ? kQuadA : kQuadB) * *v[j];
+      for (const Vec3& x : tet_quadrature_points(b.mesh, t)) {  // exact for quadratics, weight V/4 each
         b.points.positions.push_back(x);
         b.points.weights.push_back(volume / 4.0);
         b.points.tets.push_back(t);
@@ -418,7 +410,8 @@ Vec3 Discretisation::interpolate_node(Index node, std::span<const double> u) con
   return v;
 }
 
-bool Discretisation::shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values) const {
+bool Discretisation::shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values,
+                                        std::vector<Vec3>* gradients) const {
   std::vector<Index> candidates;
   basis_->cloud.search->within(x, basis_->cloud.max_support_radius, candidates);
   nodes.clear();
@@ -433,7 +426,23 @@ bool Discretisation::shape_functions_at(const Vec3& x, std::vector<Index>& nodes
     radii[k] = basis_->cloud.support_radius[nodes[k]];
   }
   values.resize(nodes.size());
-  return basis_->shape_functions->evaluate(x, coordinates, radii, values, {}).ok;
+  if (gradients) gradients->resize(nodes.size());
+  return basis_->shape_functions
+      ->evaluate(x, coordinates, radii, values, gradients ? std::span<Vec3>(*gradients) : std::span<Vec3>())
+      .ok;
+}
+
+std::optional<Mat3> Discretisation::deformation_gradient(const Vec3& X, std::span<const double> u) const {
+  std::vector<Index> nodes;
+  std::vector<double> values;
+  std::vector<Vec3> gradients;
+  if (!shape_functions_at(X, nodes, values, &gradients)) return std::nullopt;
+  Mat3 F = Mat3::Identity();
+  for (std::size_t k = 0; k < nodes.size(); ++k) {
+    const double* u_k = u.data() + 3 * static_cast<std::size_t>(nodes[k]);
+    F += Vec3(u_k[0], u_k[1], u_k[2]) * gradients[k].transpose();
+  }
+  return F;
 }
 
 Vec3 test_gradient(const Discretisation& discretisation, Index ip, int k) {

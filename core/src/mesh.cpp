@@ -19,6 +19,18 @@ Vec3 tet_centroid(const TetMesh& mesh, Index t) {
   return 0.25 * (mesh.points[tet[0]] + mesh.points[tet[1]] + mesh.points[tet[2]] + mesh.points[tet[3]]);
 }
 
+std::array<Vec3, 4> tet_quadrature_points(const TetMesh& mesh, Index t) {
+  constexpr double a = 0.5854101966249685, b = 0.1381966011250105;  // (5 + 3 sqrt 5) / 20, (5 - sqrt 5) / 20
+  const auto& tet = mesh.tets[static_cast<std::size_t>(t)];
+  std::array<Vec3, 4> points;
+  for (int k = 0; k < 4; ++k) {
+    Vec3& x = points[static_cast<std::size_t>(k)];
+    x = Vec3::Zero();
+    for (int j = 0; j < 4; ++j) x += (j == k ? a : b) * mesh.points[tet[j]];
+  }
+  return points;
+}
+
 std::pair<Vec3, Vec3> bounding_box(const std::vector<Vec3>& points) {
   Vec3 lo = points.front(), hi = lo;
   for (const auto& p : points) {

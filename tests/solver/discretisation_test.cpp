@@ -292,6 +292,53 @@ TEST(Discretisation, RigidMotionsCarryNoForce) {
   EXPECT_NEAR(model->kernel.strain_energy(u), 0.0, 1e-18);
 }
 
+// The field's F anywhere (what the fold check reads between integration points): exact for an affine field (linear
+// reproduction), the integration point's own F at its position, and the central difference of the interpolated field
+// elsewhere, to the difference's truncation error (h = 1e-6 m on 2.5 mm supports: relative O(1e-7)).
+TEST(Discretisation, TheFieldsDeformationGradientAnywhereIsItsDerivative) {
+  const auto model = make_model("mmls");
+  const Discretisation& d = model->discretisation;
+  Mat3 H;
+  H << 0.1, -0.2, 0.05, 0.3, -0.1, 0.02, -0.04, 0.15, 0.2;
+  std::vector<double> affine(3 * static_cast<std::size_t>(d.node_count()));
+  for (Index i = 0; i < d.node_count(); ++i) {
+    const Vec3 u = H * d.nodes()[i] + Vec3(0.001, 0.002, -0.001);
+    for (int c = 0; c < 3; ++c) affine[3 * static_cast<std::size_t>(i) + c] = u[c];
+  }
+  const std::vector<double> wavy = random_field(d.node_count(), 2e-4, 11);
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> inside(0.001, 0.009);
+  const auto field_at = [&](const Vec3& x, const std::vector<double>& u) {
+    std::vector<Index> nodes;
+    std::vector<double> values;
+    EXPECT_TRUE(d.shape_functions_at(x, nodes, values));
+    Vec3 sum = Vec3::Zero();
+    for (std::size_t k = 0; k < nodes.size(); ++k)
+      sum += values[k] * Vec3(u[3 * static_cast<std::size_t>(nodes[k])], u[3 * static_cast<std::size_t>(nodes[k]) + 1],
+                              u[3 * static_cast<std::size_t>(nodes[k]) + 2]);
+    return sum;
+  };
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vec3 x(inside(random), inside(random), inside(random));
+    const auto F = d.deformation_gradient(x, affine);
+    ASSERT_TRUE(F);
+    EXPECT_LT((*F - Mat3::Identity() - H).norm(), 1e-10) << *F;
+    const auto G = d.deformation_gradient(x, wavy);
+    ASSERT_TRUE(G);
+    constexpr double h = 1e-6;
+    Mat3 difference = Mat3::Identity();
+    for (int j = 0; j < 3; ++j)
+      difference.col(j) += (field_at(x + h * Vec3::Unit(j), wavy) - field_at(x - h * Vec3::Unit(j), wavy)) / (2 * h);
+    EXPECT_LT((*G - difference).norm(), 1e-6 * (*G - Mat3::Identity()).norm()) << *G << "\n" << difference;
+  }
+  for (Index ip = 0; ip < d.points().count(); ip += 37) {
+    const auto F = d.deformation_gradient(d.points().positions[ip], wavy);
+    ASSERT_TRUE(F);
+    EXPECT_LT((*F - d.deformation_gradient(ip, wavy)).norm(), 1e-12) << ip;
+  }
+  EXPECT_FALSE(d.deformation_gradient(Vec3(0.5, 0.5, 0.5), wavy));  // far outside every support
+}
+
 // Largest |dE/du_i - f_i| over every `stride`-th unknown, by central differences with h = 1e-8 m on u ~ 1e-4 m
 // (truncation error O(h^2) times the third derivative of E, round-off O(eps E / h)).
 double worst_gradient_error(const ForceKernel& model, std::vector<double> u, std::span<const double> f,

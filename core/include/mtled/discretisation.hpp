@@ -7,6 +7,7 @@
 // reference; the force evaluation's run-time state lives apart, in the ForceKernel (force_kernel.hpp). What depends
 // on the mesh alone (MeshlessBasis) is shared by discretisations of one mesh with other materials.
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -134,8 +135,13 @@ class Discretisation {
   Vec3 interpolate_node(Index node, std::span<const double> u) const;
   // F = I + sum_I u_I (x) grad N_I at point ip (each point's own; the force kernel's may be averaged).
   Mat3 deformation_gradient(Index ip, std::span<const double> u) const;
-  // Shape functions at any point of the body; false if no support covers it or the fit fails.
-  bool shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values) const;
+  // Shape functions at any point of the body (and their reference gradients, when `gradients` is given); false if no
+  // support covers it or the fit fails.
+  bool shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values,
+                          std::vector<Vec3>* gradients = nullptr) const;
+  // F = I + sum_I u_I (x) grad N_I at any point X of the reference body (the field itself, between the integration
+  // points); nullopt if no support covers X.
+  std::optional<Mat3> deformation_gradient(const Vec3& X, std::span<const double> u) const;
   // Lumped mass per node (kg) from per-integration-point density multipliers (empty: none). Each integration
   // point gives rho w / n to each of its n support nodes.
   std::vector<double> lumped_mass(std::span<const double> density_scale = {}) const;

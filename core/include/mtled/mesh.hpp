@@ -33,6 +33,9 @@ struct TetMesh {
 double tet_volume(const TetMesh& mesh, Index t);
 // The mean of tet `t`'s vertices.
 Vec3 tet_centroid(const TetMesh& mesh, Index t);
+// The four points of the symmetric degree-2 quadrature rule in tet `t` (each weighs a quarter of its volume), all
+// inside it: barycentric (a, b, b, b) and its permutations.
+std::array<Vec3, 4> tet_quadrature_points(const TetMesh& mesh, Index t);
 // The smallest axis-aligned box holding the points (which must not be empty): lower and upper corners.
 std::pair<Vec3, Vec3> bounding_box(const std::vector<Vec3>& points);
 
