@@ -1,15 +1,17 @@
 #pragma once
 // /monitors/inversion_every_steps: the background tets moved by the interpolated displacements at their
-// vertices, every that many steps and after the last one. A tet whose moved volume is not positive means the
-// material folded between integration points (a driver pushed single nodes through it), which no integration
-// point's J need show, unless it lies in the needle's zone (a vertex within the needle's radius plus its support
-// radius of the swept shaft): the kinematic needle cannot cut the tissue, so the tets around its path fold; those
-// are counted as cut ("cut_tets" in summary.json). Slivers (radius ratio under 0.1) are not judged: a tet that thin
-// turns over when the interpolated field departs from affine by its thickness, as a dynamic relaxation's transient
-// does on a jittered cloud while the material stays whole (the stability study's jittered cubes end within 1e-9 of
-// the exact force); a fold of the material turns its well-shaped neighbours over too. /monitors/inversion says what a
-// fold elsewhere does: "stop" (the default) ends the run (InstabilityError "inverted_between_points"), "warn" logs
-// it once and records it in summary.json.
+// vertices, every that many steps and after the last one. A tet whose moved volume is not positive is looked at
+// closer, as the integration points' J cannot show a fold between them:
+// - in the needle's zone (a vertex within the needle's radius plus its support radius of the swept shaft) it is cut:
+//   the kinematic needle cannot cut the tissue, so the tets around its path fold ("cut_tets" in summary.json);
+// - a sliver (radius ratio under 0.1) is not judged;
+// - otherwise the displacement field itself is read inside the tet (its centroid and the degree-2 rule's four
+//   points): J <= 0 at one of them is a fold of the material between integration points (a driver pushed nodes
+//   through it); J > 0 at all of them means the field turns within the tet further than its four corners can follow
+//   (a rolled rim, a sliver-like tet in a relaxation's transient), counted as bent, not as a fold. A fold of the
+//   material turns the field inside out; the tet's straight edges may turn over without one.
+// /monitors/inversion says what a fold does: "stop" (the default) ends the run (InstabilityError
+// "inverted_between_points"), "warn" logs it once and records it in summary.json.
 #include <cmath>
 #include <memory>
 #include <string>
@@ -67,8 +69,20 @@ class InversionMonitor final : public StepMonitor {
 
  private:
   void check(const StepRecord& step);
+  // One check's findings over the tets turned over by their vertices (the smallest volume ratio over all but cut tets
+  // and slivers; `worst` the folded tet with the smallest J inside).
+  struct Census {
+    double smallest = INFINITY, folded_jacobian = INFINITY, bent_jacobian = INFINITY;
+    Index worst = 0;
+    long folded = 0, bent = 0, cut = 0, slivers = 0;
+  };
+  // Moves the tets by the interpolated displacements of state `step` and sorts those turned over (kinds_, ratios_).
+  Census classify(const StepRecord& step);
+  Vec3 moved(Index node) const;  // where node went, by the last interpolated displacements
   // The stop: where the fold is against the needle, how far it went, and the lever that applies.
-  [[noreturn]] void stop(const StepRecord& step, Index worst, double smallest, Index node, Vec3 moved_by) const;
+  [[noreturn]] void stop(const StepRecord& step, Index worst, double jacobian, Index node, Vec3 moved_by) const;
+  // What a tet turned over by its vertices' displacements is, at the last check (whole: not turned over).
+  enum class TetState : char { whole, cut, sliver, bent, folded };
 
   const RunContext* run_ = nullptr;
   long every_;
@@ -78,6 +92,9 @@ class InversionMonitor final : public StepMonitor {
   long checks_ = 0, last_checked_ = -1, inverted_tets_ = 0, first_inverted_at_ = 0;
   long cut_tets_ = 0;                 // the most inverted tets the needle's shaft crossed at any check
   long slivers_inverted_ = 0;         // the most inverted slivers at any check (not judged)
+  long bent_tets_ = 0;                // the most tets turned over with the field whole inside them, at any check
+  double smallest_bent_jacobian_ = INFINITY;  // the field's smallest J inside those, over the run
+  std::vector<TetState> kinds_;               // per tet, at the last check
   std::vector<char> sliver_;          // per tet: too thin to judge (radius ratio under 0.1)
   double smallest_ratio_ = INFINITY;  // the smallest moved volume over reference volume of any tet
   long smallest_at_ = 0;
