@@ -20,7 +20,9 @@ namespace mtled {
 
 TetMesh load_scene_mesh(const Scene& scene, PluginCatalog& catalog) {
   auto source = build_component<MeshSource>(catalog, scene.mesh);
-  MeshContext context{scene.document.directory(), 1};
+  MeshContext context{scene.document.directory(), 1, {}};
+  if (scene.needle)
+    context.needle_path = [&]() { return build_component<NeedleModel>(catalog, *scene.needle)->planned_path(); };
   TetMesh mesh;
   guarded(scene.mesh.parameters, "reading the mesh", [&] { mesh = source->load(context); });
   if (mesh.source.empty()) mesh.source = scene.mesh.type;
@@ -73,8 +75,11 @@ std::vector<std::shared_ptr<const Material>> region_materials(const Scene& scene
 
 std::string BasisCache::key(const Scene& scene) {
   const json& root = scene.document.root;
-  return json::array({scene.document.directory().string(), root.value("mesh", json()),
-                      root.value("shape_function", json()), root.value("discretisation", json())})
+  const json mesh = root.value("mesh", json());
+  // A mesh refined along the needle's path (refine_along_needle) depends on the needle's section too.
+  const bool along_needle = mesh.is_object() && mesh.value("refine_along_needle", false);
+  return json::array({scene.document.directory().string(), mesh, root.value("shape_function", json()),
+                      root.value("discretisation", json()), along_needle ? root.value("needle", json()) : json()})
       .dump();
 }
 

@@ -161,6 +161,7 @@ class KinematicNeedle final : public NeedleModel {
     return {&nodes_.constraints};
   }
 
+  std::optional<PlannedPath> planned_path() const override { return path_.planned(); }
   NeedleStatus status() const override {
     NeedleStatus s;
     s.depth = depth_;

@@ -242,6 +242,7 @@ class RigidContactNeedle final : public NeedleModel {
 
   std::vector<NodalConstraints*> constraints() override { return {&contact_}; }
 
+  std::optional<PlannedPath> planned_path() const override { return path_.planned(); }
   NeedleStatus status() const override {
     NeedleStatus s;
     s.depth = depth_;

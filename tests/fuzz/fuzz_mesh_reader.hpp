@@ -70,7 +70,7 @@ class ReaderHarness {
     if (!problems.empty()) finding("the harness's parameter block is invalid: " + problems.front().format());
     try {
       const auto source = registry_.create<MeshSource>(name_, parameters);
-      TetMesh mesh = source->load(MeshContext{directory_, 1});
+      TetMesh mesh = source->load(MeshContext{directory_, 1, {}});
       check_indices(mesh);
       remove_unused_nodes(mesh);
       check_indices(mesh);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <map>
 #include <sstream>
 
 #include "test_support.hpp"
@@ -557,6 +558,38 @@ TEST(Cli, AFoldAwayFromTheNeedleStopsTheRunWhereTheNeedleCutsDoNot) {
   EXPECT_GT(summary["needle"]["final_depth_m"].get<double>(), 0.0) << summary.dump();
   EXPECT_LE(summary["needle"]["final_depth_m"].get<double>(), 0.008);
   expect_contains(test::read_text(folder / "pushed" / "last_good_state.vtu"), "Name=\"folded\"");
+}
+
+// A mesh refined along the needle (/mesh/refine_along_needle) takes the segment from the scene's needle section,
+// through the needle plugin: `mtled mesh` writes the same mesh as with the needle's entry and tip as refine_from and
+// refine_to, and a scene without a needle is refused, naming the setting.
+TEST(Cli, AMeshRefinedAlongTheNeedleIsTheMeshRefinedAlongItsEntryAndTip) {
+  const fs::path folder = test::scratch_dir("cli-refine-along-needle");
+  const json needle = {
+      {"type", "kinematic"}, {"entry", {0.001, 0.0, 0.01}}, {"direction", {0, 0, -1}}, {"depth", 0.006}};
+  json along = test::gel_cylinder_scene(0.01, needle);
+  along["mesh"]["refine_along_needle"] = true;
+  along["mesh"]["refine_size"] = 0.0007;
+  json ends = along;
+  ends["mesh"].erase("refine_along_needle");
+  ends["mesh"]["refine_from"] = {0.001, 0.0, 0.01};
+  ends["mesh"]["refine_to"] = {0.001, 0.0, 0.004};
+  json without = along;
+  without.erase("needle");
+  std::map<std::string, std::string> written;
+  for (const auto& [name, scene] : {std::pair{"along", along}, std::pair{"ends", ends}}) {
+    test::write_text(folder / (std::string(name) + ".json"), scene.dump(2));
+    const fs::path inp = folder / (std::string(name) + ".inp");
+    const auto result =
+        test::run_mtled({"mesh", (folder / (std::string(name) + ".json")).string(), "-o", inp.string()});
+    ASSERT_EQ(result.exit_code, 0) << result.output;
+    written[name] = test::read_text(inp);
+  }
+  EXPECT_EQ(written["along"], written["ends"]);
+  test::write_text(folder / "without.json", without.dump(2));
+  const auto refused = test::run_mtled({"mesh", (folder / "without.json").string(), "-o", (folder / "w.inp").string()});
+  EXPECT_EQ(refused.exit_code, 2) << refused.output;
+  expect_contains(refused.output, "/mesh/refine_along_needle");
 }
 
 TEST(Cli, OverridesAndUnknownCommands) {

@@ -246,7 +246,7 @@ TEST(LabelMapCube, CompressionMatchesTheExactSolutionAndGmshsCube) {
     json block = mesh;
     if (block.contains("path")) block["path"] = (folder / block["path"].get<std::string>()).string();
     block.erase("type");
-    const TetMesh cloud = make<MeshSource>(mesh["type"].get<std::string>(), block)->load({folder, 1});
+    const TetMesh cloud = make<MeshSource>(mesh["type"].get<std::string>(), block)->load({folder, 1, {}});
     double volume = 0.0;
     for (Index t = 0; t < cloud.tet_count(); ++t) volume += tet_volume(cloud, t);
     const json summary = read_json(folder / name / "summary.json");

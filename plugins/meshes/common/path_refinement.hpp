@@ -10,7 +10,9 @@
 #include <utility>
 
 #include "mtled/errors.hpp"
+#include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/log.hpp"
+#include "mtled/markups.hpp"
 #include "mtled/parameters.hpp"
 
 namespace mtled {
@@ -33,11 +35,19 @@ struct RefinedSize {
   }
 };
 
-// Declares refine_from, refine_to, refine_ratio, refine_size, refine_distance and refine_transition, bound to the
-// members of the same names of `Settings` (optional<Vec3> ends, optional<double> ratio, size and transition, double
-// distance). `also` names what else the sizes apply to in this generator (" (and the rims, with refine_rims)").
+// Declares refine_along_needle, refine_from, refine_to, refine_ratio, refine_size, refine_distance and
+// refine_transition, bound to the members of the same names of `Settings` (bool along_needle, optional<Vec3> ends,
+// optional<double> ratio, size and transition, double distance). `also` names what else the sizes apply to in this
+// generator (" (and the rims, with refine_rims)").
 template <class Settings>
 void declare_path_refinement(ComponentDeclaration& declaration, const std::string& also = "") {
+  declaration.boolean("refine_along_needle")
+      .defaults(false)
+      .doc(
+          "refine the mesh along the scene's needle's path, from its entry to its tip at the final depth (its entry, "
+          "direction and depth, or its trajectory's markups file, placed in the mesh's frame), instead of giving "
+          "refine_from and refine_to; target_nodes then counts the refined mesh's nodes")
+      .template to<&Settings::refine_along_needle>();
   declaration.vector3("refine_from")
       .optional()
       .unit("m")
@@ -95,17 +105,45 @@ std::optional<std::pair<Vec3, Vec3>> read_refined_segment(const Settings& settin
   if (settings.refine_ratio && settings.refine_size)
     throw InputError(p.pointer("refine_size"),
                      "give refine_ratio (a fraction of mesh_size) or refine_size (metres), not both");
+  if (settings.refine_along_needle && from)
+    throw InputError(p.pointer("refine_along_needle"),
+                     "give refine_along_needle or refine_from and refine_to, not both: the needle's path is the "
+                     "segment refine_along_needle refines along");
   if (!from) return std::nullopt;
   return std::make_pair(*from, *to);
+}
+
+// The segment to refine along when the mesh is made: refine_from and refine_to, or with refine_along_needle the
+// scene's needle's planned path, placed in the mesh's frame `mesh_frame` ("LPS", "RAS", or empty: none recorded).
+template <class Settings>
+std::optional<std::pair<Vec3, Vec3>> refined_segment_for(const Settings& settings, const Parameters& p,
+                                                         const MeshContext& context, const std::string& mesh_frame) {
+  auto segment = read_refined_segment(settings, p);
+  if (!settings.refine_along_needle) return segment;
+  std::optional<PlannedPath> path;
+  if (context.needle_path) path = context.needle_path();
+  if (!path)
+    throw InputError(p.pointer("refine_along_needle"),
+                     "the scene has no needle whose path is known before meshing: add a \"needle\" section (entry, "
+                     "direction and depth, or a trajectory), or give refine_from and refine_to");
+  if (!path->frame.empty() && !mesh_frame.empty() && path->frame != mesh_frame)
+    path->entry = flip_lps_ras(path->entry), path->tip = flip_lps_ras(path->tip);
+  log().info("{}: refining along the needle's path from ({:.6g}, {:.6g}, {:.6g}) to ({:.6g}, {:.6g}, {:.6g}) m",
+             p.pointer("refine_along_needle"), path->entry[0], path->entry[1], path->entry[2], path->tip[0],
+             path->tip[1], path->tip[2]);
+  return std::make_pair(path->entry, path->tip);
 }
 
 // A refined size with nothing to refine along (no segment, and no rims where `rims` is false) changes nothing: said,
 // not refused, since a scene switches its refinement off by dropping the segment or the rims and may keep the size.
 template <class Settings>
 void warn_if_refining_nothing(const Settings& settings, const Parameters& p, bool rims) {
-  if (settings.refine_from || rims || (!settings.refine_ratio && !settings.refine_size)) return;
-  log().warn("{} is given but refines nothing: refine_from and refine_to name the segment to refine along",
-             p.pointer(settings.refine_size ? "refine_size" : "refine_ratio"));
+  if (settings.refine_from || settings.refine_along_needle || rims || (!settings.refine_ratio && !settings.refine_size))
+    return;
+  log().warn(
+      "{} is given but refines nothing: refine_from and refine_to (or refine_along_needle) name the segment to "
+      "refine along",
+      p.pointer(settings.refine_size ? "refine_size" : "refine_ratio"));
 }
 
 template <class Settings>

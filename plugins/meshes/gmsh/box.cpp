@@ -31,8 +31,9 @@ class GmshBox final : public MeshSource {
 
   explicit GmshBox(const Parameters& p) : GmshBox(p, p.read<Settings>()) {}
 
-  TetMesh load(const MeshContext&) override {
+  TetMesh load(const MeshContext& context) override {
     GeneratorRequest request;
+    request.context = context;
     request.component = "box";
     request.description = fmt::format("Gmsh box, size {} m at {}", format_vector(size_), format_vector(origin_));
     request.build_geometry = [this] { return build(); };

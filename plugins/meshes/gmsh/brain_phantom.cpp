@@ -91,8 +91,9 @@ class GmshBrainPhantom final : public MeshSource {
 
   explicit GmshBrainPhantom(const Parameters& p) : GmshBrainPhantom(p, p.read<Settings>()) {}
 
-  TetMesh load(const MeshContext&) override {
+  TetMesh load(const MeshContext& context) override {
     GeneratorRequest request;
+    request.context = context;
     request.component = "brain_phantom";
     const Vec3 size = kDesignSize.cwiseProduct(scale_);
     request.description =

@@ -27,8 +27,8 @@ class GmshCylinder final : public MeshSource {
     stack_.layer_names = {"all"};
   }
 
-  TetMesh load(const MeshContext&) override {
-    return mesh_cylinder_stack(parameters_, stack_, "cylinder", "Gmsh cylinder");
+  TetMesh load(const MeshContext& context) override {
+    return mesh_cylinder_stack(parameters_, stack_, "cylinder", "Gmsh cylinder", context);
   }
 
  private:

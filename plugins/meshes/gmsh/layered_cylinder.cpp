@@ -48,8 +48,8 @@ class GmshLayeredCylinder final : public MeshSource {
     }
   }
 
-  TetMesh load(const MeshContext&) override {
-    return mesh_cylinder_stack(parameters_, stack_, "layered_cylinder", "Gmsh layered cylinder");
+  TetMesh load(const MeshContext& context) override {
+    return mesh_cylinder_stack(parameters_, stack_, "layered_cylinder", "Gmsh layered cylinder", context);
   }
 
  private:

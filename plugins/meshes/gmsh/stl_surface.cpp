@@ -85,6 +85,7 @@ class GmshStlSurface final : public MeshSource {
     const StlSurface surface = read_closed_stl(file, scale_);
     check_extent(surface);
     GeneratorRequest request;
+    request.context = context;
     request.component = "stl_surface";
     request.description = fmt::format("Gmsh volume inside {} (scale {:.6g})", file.string(), scale_);
     request.build_geometry = [&surface] { return build_from_surface(surface); };

@@ -202,8 +202,8 @@ class LabelMapMesh final : public MeshSource {
     d.example({{"path", "brain.nii.gz"}, {"target_nodes", 20000}});
   }
 
-  explicit LabelMapMesh(const Parameters& p)
-      : p_(p), settings_(p.read<Settings>()), segment_(read_refined_segment(settings_, p)) {
+  explicit LabelMapMesh(const Parameters& p) : p_(p), settings_(p.read<Settings>()) {
+    read_refined_segment(settings_, p);  // refused early: both ends or neither, one size
     if (settings_.mesh_size.has_value() == settings_.target_nodes.has_value())
       throw InputError(p.pointer("mesh_size"), "give exactly one of mesh_size (m) and target_nodes");
     warn_if_refining_nothing(settings_, p, false);
@@ -223,7 +223,8 @@ class LabelMapMesh final : public MeshSource {
                                                                    CGAL::parameters::relative_error_bound = 1e-6,
                                                                    CGAL::parameters::p_rng = &random);
     const double distance = settings_.surface_distance.value_or(image.spacing().maxCoeff());
-    RegionSizes sizes{mesh_size(image, meshed, counts), region_sizes(image, meshed), refined_segment(image),
+    const auto segment = refined_segment_for(settings_, p_, context, image.space);
+    RegionSizes sizes{mesh_size(image, meshed, counts), region_sizes(image, meshed), to_cgal_frame(segment, image),
                       read_refined_size(settings_)};
     if (settings_.target_nodes) {  // a trial refinement first, to size h by its count (N ~ 1 / h^3)
       const double target = static_cast<double>(*settings_.target_nodes);
@@ -253,18 +254,20 @@ class LabelMapMesh final : public MeshSource {
     std::optional<double> surface_distance;
     std::optional<std::map<std::string, double>> region_mesh_size;
     bool smooth = false;
+    bool refine_along_needle = false;
     std::optional<Vec3> refine_from, refine_to;
     std::optional<double> refine_ratio, refine_size;
     double refine_distance = 0.0;
     std::optional<double> refine_transition;
   };
 
-  // The segment to refine along in CGAL's frame (cgal_rotation).
-  std::optional<std::pair<Vec3, Vec3>> refined_segment(const LabelImage& image) const {
-    if (!segment_) return std::nullopt;
+  // A segment in the image's physical frame, in CGAL's (cgal_rotation).
+  static std::optional<std::pair<Vec3, Vec3>> to_cgal_frame(const std::optional<std::pair<Vec3, Vec3>>& segment,
+                                                            const LabelImage& image) {
+    if (!segment) return std::nullopt;
     const Mat3 rotation = cgal_rotation(image);
     const auto to_cgal = [&](const Vec3& x) -> Vec3 { return rotation.transpose() * (x - image.origin); };
-    return std::make_pair(to_cgal(segment_->first), to_cgal(segment_->second));
+    return std::make_pair(to_cgal(segment->first), to_cgal(segment->second));
   }
 
   std::set<std::int32_t> meshed_labels(const LabelImage& image, const std::map<std::int32_t, std::int64_t>& counts) const {
@@ -377,7 +380,6 @@ class LabelMapMesh final : public MeshSource {
 
   Parameters p_;
   Settings settings_;
-  std::optional<std::pair<Vec3, Vec3>> segment_;
 };
 
 // The complex's cells as tets in the image's frame (cgal_rotation).

@@ -113,6 +113,35 @@ TEST(GmshCylinder, AnAbsoluteRefineSizeIsTheSameWhateverTheMeshSize) {
   EXPECT_NE(said.find("/test/refine_size is given but refines nothing"), std::string::npos) << said;
 }
 
+// refine_along_needle takes the segment from the scene's needle (MeshContext::needle_path): the same mesh as its
+// entry and tip given as refine_from and refine_to. Without a needle, or with both, it is refused, naming itself.
+TEST(GmshCylinder, RefinesAlongTheNeedlesPlannedPath) {
+  const json along = {{"radius", 0.015},
+                      {"height", 0.017},
+                      {"mesh_size", 0.003},
+                      {"refine_along_needle", true},
+                      {"refine_size", 0.001}};
+  json given = along;
+  given.erase("refine_along_needle");
+  given["refine_from"] = {0.002, 0.0, 0.017};
+  given["refine_to"] = {0.002, 0.0, 0.004};
+  MeshContext with_needle;
+  with_needle.needle_path = [] { return PlannedPath{Vec3(0.002, 0.0, 0.017), Vec3(0.002, 0.0, 0.004), ""}; };
+  const TetMesh from_needle = kernel_ready(make<MeshSource>("cylinder", along)->load(with_needle));
+  const TetMesh from_ends = load("cylinder", given);
+  ASSERT_EQ(from_needle.node_count(), from_ends.node_count());
+  EXPECT_EQ(from_needle.points, from_ends.points);
+  EXPECT_GT(
+      from_needle.node_count(),
+      load("cylinder", {{"radius", 0.015}, {"height", 0.017}, {"mesh_size", 0.003}}).node_count());  // it did refine
+  EXPECT_EQ(input_error([&] { make<MeshSource>("cylinder", along)->load(MeshContext{}); }).where,
+            "/test/refine_along_needle");
+  json both = given;
+  both["refine_along_needle"] = true;
+  EXPECT_EQ(input_error([&] { make<MeshSource>("cylinder", both)->load(with_needle); }).where,
+            "/test/refine_along_needle");
+}
+
 TEST(GmshCylinder, RefinesAlongTheRims) {
   // The semi-confined sample at mesh size 3 mm, refined to 0.25 x 3 mm within 1 mm of the two rims (where the
   // bonded faces meet the side), growing back to 3 mm over the next 6 mm: near the rims the edges are about a

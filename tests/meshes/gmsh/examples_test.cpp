@@ -25,7 +25,7 @@ TEST_P(GmshGeneratorExample, LoadsAndHitsItsTarget) {
              corners[f[2]] + "\nendloop\nendfacet\n";
     write_text(folder / example.at("path").get<std::string>(), stl + "endsolid octahedron\n");
   }
-  const TetMesh mesh = kernel_ready(make<MeshSource>(name, example)->load(MeshContext{folder, 1}));
+  const TetMesh mesh = kernel_ready(make<MeshSource>(name, example)->load(MeshContext{folder, 1, {}}));
   const double target = example.at("target_nodes").get<double>();
   EXPECT_NEAR(mesh.node_count(), target, 0.03 * target);
 }

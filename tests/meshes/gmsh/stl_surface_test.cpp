@@ -120,7 +120,7 @@ void write_binary_stl(const std::filesystem::path& file, const Polyhedron& p) {
 
 TetMesh load_stl(const std::filesystem::path& folder, const json& block) {
   auto source = make<MeshSource>("stl_surface", block);
-  return kernel_ready(source->load(MeshContext{folder, 1}));
+  return kernel_ready(source->load(MeshContext{folder, 1, {}}));
 }
 
 TEST(GmshStlSurface, BoxRoundTripKeepsTheVolumeAndHitsTheTarget) {

@@ -15,6 +15,7 @@
 #include "mtled/errors.hpp"
 #include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/io/label_image.hpp"
+#include "mtled/markups.hpp"
 #include "mtled/mesh.hpp"
 #include "test_support.hpp"
 
@@ -32,7 +33,9 @@ fs::path write_label_map(const std::string& shape, const std::string& name, cons
   return out;
 }
 
-TetMesh mesh_label_map(const json& block) { return test::make<MeshSource>("label_map", block)->load({{}, 1}); }
+TetMesh mesh_label_map(const json& block, const MeshContext& context = {{}, 1, {}}) {
+  return test::make<MeshSource>("label_map", block)->load(context);
+}
 
 double region_volume(const TetMesh& mesh, const std::string& region) {
   double volume = 0.0;
@@ -189,6 +192,19 @@ TEST(LabelMap, RefinesAlongASegmentInTheImagesFrame) {
   ASSERT_GT(refined.nodes, 20);
   ASSERT_GT(bulk.nodes, 20);
   EXPECT_NEAR(refined.mean / bulk.mean, 1.0 / 3.0, 0.12);
+
+  // The same segment as a needle's path planned in RAS (a Slicer markups file's other frame): placed in the image's
+  // LPS frame, it gives the same mesh.
+  ASSERT_EQ(image.space, "LPS");
+  json from_needle = block;
+  from_needle.erase("refine_from");
+  from_needle.erase("refine_to");
+  from_needle["refine_along_needle"] = true;
+  MeshContext needle{{}, 1, {}};
+  needle.needle_path = [&] {
+    return PlannedPath{flip_lps_ras(point(along, -4e-3)), flip_lps_ras(point(along, 4e-3)), "RAS"};
+  };
+  EXPECT_EQ(mesh_label_map(from_needle, needle).points, mesh.points);
 
   block["refine_ratio"] = 0.5;  // and a size: one or the other
   EXPECT_THROW(

@@ -9,7 +9,7 @@ std::filesystem::path fixtures() { return source_dir() / "tests" / "data" / "mes
 
 TetMesh read_mesh(const std::string& reader, const json& block, const std::filesystem::path& directory) {
   const auto source = make<MeshSource>(reader, block);
-  return source->load(MeshContext{directory, 1});
+  return source->load(MeshContext{directory, 1, {}});
 }
 
 InputError read_error(const std::string& reader, const json& block, const std::filesystem::path& directory) {

@@ -24,7 +24,7 @@ std::string load_damaged(MeshSource& source, const std::filesystem::path& dir, c
                          const std::string& text) {
   write_text(dir / file, text);
   try {
-    TetMesh mesh = source.load(MeshContext{dir, 1});
+    TetMesh mesh = source.load(MeshContext{dir, 1, {}});
     // What a reader accepts must have valid indices (check_mesh may still refuse its geometry).
     for (const auto& tet : mesh.tets)
       for (Index v : tet)

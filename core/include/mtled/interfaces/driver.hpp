@@ -2,11 +2,13 @@
 // Drivers move or push the body as the load proceeds: boundary conditions and needle models.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/parameters.hpp"
 #include "mtled/types.hpp"
 
@@ -112,6 +114,8 @@ class NeedleModel : public Driver {
   static constexpr Category category = Category::needle;
   ~NeedleModel() override;
   virtual NeedleStatus status() const = 0;
+  // The path it will sweep, from its parameters alone (before setup): what a mesh refines along. None by default.
+  virtual std::optional<PlannedPath> planned_path() const { return std::nullopt; }
 };
 
 }  // namespace mtled

@@ -89,8 +89,9 @@ std::string describe(const CylinderStack& stack) {
 }
 
 TetMesh mesh_cylinder_stack(const Parameters& parameters, const CylinderStack& stack, const std::string& component,
-                            const std::string& title) {
+                            const std::string& title, const MeshContext& context) {
   GeneratorRequest request;
+  request.context = context;
   request.component = component;
   request.description = fmt::format("{}, {}", title, describe(stack));
   request.build_geometry = [&stack] { return build_cylinder_stack(stack); };

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "mtled/interfaces/mesh_source.hpp"
 #include "mtled/mesh.hpp"
 #include "mtled/parameters.hpp"
 #include "support/gmsh_model.hpp"
@@ -35,6 +36,6 @@ std::string describe(const CylinderStack& stack);
 // The stack meshed by Gmsh with the generator's parameters (target_nodes, ...), its elements no larger than the radius
 // and its rims kept sharp: the mesh of the `component` ("cylinder", "layered_cylinder") described as `title`.
 TetMesh mesh_cylinder_stack(const Parameters& parameters, const CylinderStack& stack, const std::string& component,
-                            const std::string& title);
+                            const std::string& title, const MeshContext& context);
 
 }  // namespace mtled

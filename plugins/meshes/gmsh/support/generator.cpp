@@ -74,7 +74,7 @@ struct Refinement {
 
 std::optional<Refinement> read_refinement(const MeshSizeSettings& size, const Parameters& p,
                                           const GeneratorRequest& request) {
-  auto segment = read_refined_segment(size, p);
+  auto segment = refined_segment_for(size, p, request.context, "");  // Gmsh's meshes record no frame
   const bool rims = request.rim_curves && size.refine_rims;
   warn_if_refining_nothing(size, p, rims);
   if (!segment && !rims) return std::nullopt;

@@ -30,9 +30,11 @@ struct MeshSizeSettings {
   double refine_distance = 0.0;
   std::optional<double> refine_transition;
   bool refine_rims = false;  // false where the generator does not declare it
+  bool refine_along_needle = false;
 };
 
 struct GeneratorRequest {
+  MeshContext context;      // the scene's: its needle's planned path, for refine_along_needle
   std::string component;    // the generator's name, for log lines and messages
   std::string description;  // what is generated, with its dimensions: becomes TetMesh::source
   // Builds the geometry and its physical groups into the current, empty Gmsh model and measures it.

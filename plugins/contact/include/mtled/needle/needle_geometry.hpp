@@ -26,6 +26,8 @@ struct NeedlePath {
   double axial(const Vec3& x) const { return direction.dot(x - entry); }
   double radial(const Vec3& x) const { return ((x - entry) - direction * axial(x)).norm(); }
   Vec3 tip(double advance) const { return entry + advance * direction; }
+  // From the entry to the tip at the final depth: what a mesh refines along (refine_along_needle).
+  PlannedPath planned() const { return {entry, tip(depth), frame}; }
 };
 
 // Declares diameter, entry, direction, depth and trajectory (shared by all needle models), bound to
