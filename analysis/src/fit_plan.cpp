@@ -568,7 +568,7 @@ class FitReader {
   void check_markers_inside(Experiment& e, const Scene& scene, PluginCatalog& catalog) {
     const TetMesh mesh = load_scene_mesh(scene, catalog);
     // Markups in the other of Slicer's frames than the mesh records: into the mesh's (as the needle's trajectory).
-    if (!e.markups_frame.empty() && !mesh.coordinate_system.empty() && e.markups_frame != mesh.coordinate_system) {
+    if (frames_differ(e.markups_frame, mesh.coordinate_system)) {
       for (auto& d : e.data) {
         d.position = flip_lps_ras(d.position);
         if (d.component < 2) d.value = -d.value;

@@ -95,7 +95,6 @@ InversionMonitor::Census InversionMonitor::classify(const StepRecord& step) {
       sliver_[static_cast<std::size_t>(t)] = tet_radius_ratio(mesh, t) < kSliverRadiusRatio;
   }
   interpolated_.resize(step.u.size());
-  ratios_.assign(static_cast<std::size_t>(mesh.tet_count()), 0.0);
   kinds_.assign(static_cast<std::size_t>(mesh.tet_count()), TetState::whole);
   model.interpolate(step.u, interpolated_);
   const bool needle = step.needle && step.needle->depth > 0.0;
@@ -105,7 +104,6 @@ InversionMonitor::Census InversionMonitor::classify(const StepRecord& step) {
     const Vec3 a = moved(v[0]);
     const double volume = (moved(v[1]) - a).cross(moved(v[2]) - a).dot(moved(v[3]) - a) / 6.0;
     const double ratio = volume / tet_volume(mesh, t);
-    ratios_[static_cast<std::size_t>(t)] = ratio;
     if (ratio > 0.0) {
       if (!sliver_[static_cast<std::size_t>(t)]) census.smallest = std::min(census.smallest, ratio);
       continue;
@@ -128,7 +126,8 @@ InversionMonitor::Census InversionMonitor::classify(const StepRecord& step) {
       continue;
     }
     state = TetState::folded, ++census.folded;
-    if (!(jacobian >= census.folded_jacobian)) census.folded_jacobian = jacobian, census.worst = t;
+    if (!(jacobian >= census.folded_jacobian))
+      census.folded_jacobian = jacobian, census.worst = t, census.worst_ratio = ratio;
   }
   return census;
 }
@@ -167,7 +166,7 @@ void InversionMonitor::check(const StepRecord& step) {
     first_node_ = node;
     first_position_ = mesh.points[node];
   }
-  if (stop_) stop(step, worst, census.folded_jacobian, node, moved(node) - mesh.points[node]);
+  if (stop_) stop(step, census, node, moved(node) - mesh.points[node]);
   if (first)
     log().warn(
         "step {}: {} background tets folded away from the needle (the field's J down to {:.3g} inside them, around "
@@ -213,7 +212,8 @@ std::string fold_lever(const FoldAdvice& advice, const NeedleStatus* needle, dou
          "there instead, or refine the mesh where it pushes";
 }
 
-void InversionMonitor::stop(const StepRecord& step, Index worst, double jacobian, Index node, Vec3 moved_by) const {
+void InversionMonitor::stop(const StepRecord& step, const Census& census, Index node, Vec3 moved_by) const {
+  const Index worst = census.worst;
   const Discretisation& model = *run_->discretisation;
   const TetMesh& mesh = model.mesh();
   const NeedleStatus* needle = step.needle && step.needle->depth > 0.0 ? &*step.needle : nullptr;
@@ -259,7 +259,7 @@ void InversionMonitor::stop(const StepRecord& step, Index worst, double jacobian
           "the material folded between integration points. To go on: {}; or set /monitors/inversion to "
           "\"warn\" to finish and record the folds (last_good_state.vtu marks them in its cell field "
           "\"folded\")",
-          worst, where, jacobian, ratios_[static_cast<std::size_t>(worst)], node, 1e3 * moved_by.norm(),
+          worst, where, census.folded_jacobian, census.worst_ratio, node, 1e3 * moved_by.norm(),
           fold_lever(advice_, needle, radial, boundary)),
       model, node);
 }

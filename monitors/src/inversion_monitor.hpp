@@ -70,17 +70,17 @@ class InversionMonitor final : public StepMonitor {
  private:
   void check(const StepRecord& step);
   // One check's findings over the tets turned over by their vertices (the smallest volume ratio over all but cut tets
-  // and slivers; `worst` the folded tet with the smallest J inside).
+  // and slivers; `worst` the folded tet with the smallest J inside, `worst_ratio` its moved volume ratio).
   struct Census {
-    double smallest = INFINITY, folded_jacobian = INFINITY, bent_jacobian = INFINITY;
+    double smallest = INFINITY, folded_jacobian = INFINITY, bent_jacobian = INFINITY, worst_ratio = 0.0;
     Index worst = 0;
     long folded = 0, bent = 0, cut = 0, slivers = 0;
   };
-  // Moves the tets by the interpolated displacements of state `step` and sorts those turned over (kinds_, ratios_).
+  // Moves the tets by the interpolated displacements of state `step` and sorts those turned over (kinds_).
   Census classify(const StepRecord& step);
   Vec3 moved(Index node) const;  // where node went, by the last interpolated displacements
   // The stop: where the fold is against the needle, how far it went, and the lever that applies.
-  [[noreturn]] void stop(const StepRecord& step, Index worst, double jacobian, Index node, Vec3 moved_by) const;
+  [[noreturn]] void stop(const StepRecord& step, const Census& census, Index node, Vec3 moved_by) const;
   // What a tet turned over by its vertices' displacements is, at the last check (whole: not turned over).
   enum class TetState : char { whole, cut, sliver, bent, folded };
 
@@ -99,7 +99,6 @@ class InversionMonitor final : public StepMonitor {
   double smallest_ratio_ = INFINITY;  // the smallest moved volume over reference volume of any tet
   long smallest_at_ = 0;
   std::vector<double> interpolated_;
-  std::vector<double> ratios_;  // each tet's moved volume over its reference volume at the last check
   Index first_node_ = 0;        // the farthest-moved vertex of the worst tet, at the first check that found one
   Vec3 first_position_ = Vec3::Zero();
 };

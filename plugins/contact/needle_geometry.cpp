@@ -144,7 +144,7 @@ double spacing_at_entry(const NeedlePath& path, const Discretisation& model) {
 
 void place_needle_path(NeedlePath& path, const Discretisation& model, const Parameters& p) {
   const std::string& mesh_frame = model.mesh().coordinate_system;
-  if (!path.frame.empty() && !mesh_frame.empty() && path.frame != mesh_frame) {
+  if (frames_differ(path.frame, mesh_frame)) {
     path.entry = flip_lps_ras(path.entry);
     path.direction = flip_lps_ras(path.direction);
     path.frame = mesh_frame;

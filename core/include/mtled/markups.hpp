@@ -27,5 +27,10 @@ MarkupsPoints parse_markups(const std::string& text, const std::string& label); 
 
 // The same point in the other of Slicer's two frames (LPS and RAS differ in the sign of x and y).
 inline Vec3 flip_lps_ras(const Vec3& x) { return Vec3(-x[0], -x[1], x[2]); }
+// Whether points in frame `from` need flip_lps_ras to lie in a mesh recording frame `to`: both known and different
+// (an empty frame: the scene's own coordinates, or a mesh that records none).
+inline bool frames_differ(const std::string& from, const std::string& to) {
+  return !from.empty() && !to.empty() && from != to;
+}
 
 }  // namespace mtled

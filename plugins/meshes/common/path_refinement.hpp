@@ -126,7 +126,7 @@ std::optional<std::pair<Vec3, Vec3>> refined_segment_for(const Settings& setting
     throw InputError(p.pointer("refine_along_needle"),
                      "the scene has no needle whose path is known before meshing: add a \"needle\" section (entry, "
                      "direction and depth, or a trajectory), or give refine_from and refine_to");
-  if (!path->frame.empty() && !mesh_frame.empty() && path->frame != mesh_frame)
+  if (frames_differ(path->frame, mesh_frame))
     path->entry = flip_lps_ras(path->entry), path->tip = flip_lps_ras(path->tip);
   log().info("{}: refining along the needle's path from ({:.6g}, {:.6g}, {:.6g}) to ({:.6g}, {:.6g}, {:.6g}) m",
              p.pointer("refine_along_needle"), path->entry[0], path->entry[1], path->entry[2], path->tip[0],
