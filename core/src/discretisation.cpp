@@ -432,11 +432,12 @@ bool Discretisation::shape_functions_at(const Vec3& x, std::vector<Index>& nodes
       .ok;
 }
 
-std::optional<Mat3> Discretisation::deformation_gradient(const Vec3& X, std::span<const double> u) const {
+std::optional<Mat3> field_deformation_gradient(const Discretisation& discretisation, const Vec3& X,
+                                               std::span<const double> u) {
   std::vector<Index> nodes;
   std::vector<double> values;
   std::vector<Vec3> gradients;
-  if (!shape_functions_at(X, nodes, values, &gradients)) return std::nullopt;
+  if (!discretisation.shape_functions_at(X, nodes, values, &gradients)) return std::nullopt;
   Mat3 F = Mat3::Identity();
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     const double* u_k = u.data() + 3 * static_cast<std::size_t>(nodes[k]);

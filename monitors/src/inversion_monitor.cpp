@@ -75,7 +75,7 @@ namespace {
 double smallest_jacobian_inside(const Discretisation& model, Index t, std::span<const double> u) {
   double smallest = INFINITY;
   const auto sample = [&](const Vec3& x) {
-    const auto F = model.deformation_gradient(x, u);
+    const auto F = field_deformation_gradient(model, x, u);
     smallest = F ? std::min(smallest, F->determinant()) : NAN;
   };
   sample(tet_centroid(model.mesh(), t));

@@ -139,9 +139,6 @@ class Discretisation {
   // support covers it or the fit fails.
   bool shape_functions_at(const Vec3& x, std::vector<Index>& nodes, std::vector<double>& values,
                           std::vector<Vec3>* gradients = nullptr) const;
-  // F = I + sum_I u_I (x) grad N_I at any point X of the reference body (the field itself, between the integration
-  // points); nullopt if no support covers X.
-  std::optional<Mat3> deformation_gradient(const Vec3& X, std::span<const double> u) const;
   // Lumped mass per node (kg) from per-integration-point density multipliers (empty: none). Each integration
   // point gives rho w / n to each of its n support nodes.
   std::vector<double> lumped_mass(std::span<const double> density_scale = {}) const;
@@ -158,6 +155,11 @@ class Discretisation {
 // The test-function gradient of entry k of point ip: the gradient plus consistent integration's correction,
 // xi_I - mean over ip's support of xi_J, what the internal forces multiply the stress by (f_I = sum_p w_p P_p t_pI).
 Vec3 test_gradient(const Discretisation& discretisation, Index ip, int k);
+
+// F = I + sum_I u_I (x) grad N_I at any point X of the reference body (the field itself, between the integration
+// points, where Discretisation::deformation_gradient gives a point's own); nullopt if no support covers X.
+std::optional<Mat3> field_deformation_gradient(const Discretisation& discretisation, const Vec3& X,
+                                               std::span<const double> u);
 
 // How much stiffer each integration point's material is at the displacement u than at rest: the largest eigenvalue
 // of its tangent dP/dF at u over that at F = I, at least 1 (a softer point, or one whose F the law refuses, gets 1).
