@@ -185,19 +185,32 @@ double write_meshes_once(Plan& plan, const fs::path& output, const std::vector<f
   const auto start = Clock::now();
   for (std::size_t x = 0; x < plan.experiments.size(); ++x) {
     Experiment& e = plan.experiments[x];
-    const bool changes_mesh = std::any_of(plan.parameters.begin(), plan.parameters.end(), [&](const Parameter& p) {
-      return p.pointers[x] == "/mesh" || p.pointers[x].rfind("/mesh/", 0) == 0;
-    });
-    if (changes_mesh) continue;
+    const auto changes = [&](const std::string& section) {
+      return std::any_of(plan.parameters.begin(), plan.parameters.end(), [&](const Parameter& p) {
+        return p.pointers[x] == section || p.pointers[x].rfind(section + "/", 0) == 0;
+      });
+    };
+    if (changes("/mesh")) continue;
     SceneDocument document = read_scene(e.scene);
     for (const auto& [pointer, value] : e.set.items()) apply_override(document, pointer + "=" + value.dump());
     for (const auto& p : plan.parameters)
       if (!p.pointers[x].empty()) apply_override(document, fmt::format("{}={:.17g}", p.pointers[x], p.start));
     PluginCatalog catalog(plugin_search_path(plugin_paths, scene_plugin_paths(document)));
     const Scene scene = validate_scene(std::move(document), catalog, run_scene_sections());
+    MeshInputs inputs;
+    const TetMesh mesh = load_scene_mesh(scene, catalog, &inputs);
+    if (inputs.asked_needle_path && changes("/needle")) {
+      // Refined along the needle's path, which a parameter may move: each run's mesh follows its own needle (runs in
+      // the fit's process still share a basis while the path stays).
+      log().info(
+          "fit: experiment {}'s mesh is refined along the needle, a parameter of which is fitted: the runs "
+          "mesh along their own needle's path",
+          e.name);
+      continue;
+    }
     e.mesh_file = fs::absolute(output / "meshes" / (e.name + ".inp"));
     fs::create_directories(e.mesh_file.parent_path());
-    write_abaqus_mesh(load_scene_mesh(scene, catalog), e.mesh_file);
+    write_abaqus_mesh(mesh, e.mesh_file);
   }
   return std::chrono::duration<double>(Clock::now() - start).count();
 }

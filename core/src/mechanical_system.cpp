@@ -18,20 +18,13 @@
 
 namespace mtled {
 
-TetMesh load_scene_mesh(const Scene& scene, PluginCatalog& catalog) {
-  auto source = build_component<MeshSource>(catalog, scene.mesh);
-  MeshContext context{scene.document.directory(), 1, {}};
-  if (scene.needle)
-    context.needle_path = [&]() { return build_component<NeedleModel>(catalog, *scene.needle)->planned_path(); };
-  TetMesh mesh;
-  guarded(scene.mesh.parameters, "reading the mesh", [&] { mesh = source->load(context); });
-  if (mesh.source.empty()) mesh.source = scene.mesh.type;
-  remove_unused_nodes(mesh);
-  check_mesh(mesh);
-  return mesh;
-}
-
 namespace {
+
+// The scene's needle's planned path, building the needle when called (empty without a needle).
+std::function<std::optional<PlannedPath>()> needle_path_of(const Scene& scene, PluginCatalog& catalog) {
+  if (!scene.needle) return {};
+  return [&scene, &catalog]() { return build_component<NeedleModel>(catalog, *scene.needle)->planned_path(); };
+}
 
 // One material per mesh region: a block with "region" fills that region, one without fills every other.
 std::vector<std::shared_ptr<const Material>> region_materials(const Scene& scene, PluginCatalog& catalog,
@@ -73,27 +66,50 @@ std::vector<std::shared_ptr<const Material>> region_materials(const Scene& scene
 
 }  // namespace
 
+TetMesh load_scene_mesh(const Scene& scene, PluginCatalog& catalog, MeshInputs* inputs) {
+  auto source = build_component<MeshSource>(catalog, scene.mesh);
+  MeshContext context{scene.document.directory(), 1, {}};
+  if (const auto needle_path = needle_path_of(scene, catalog)) {
+    context.needle_path = [needle_path, inputs]() {
+      auto path = needle_path();
+      if (inputs) *inputs = {true, path};
+      return path;
+    };
+  }
+  TetMesh mesh;
+  guarded(scene.mesh.parameters, "reading the mesh", [&] { mesh = source->load(context); });
+  if (mesh.source.empty()) mesh.source = scene.mesh.type;
+  remove_unused_nodes(mesh);
+  check_mesh(mesh);
+  return mesh;
+}
+
 std::string BasisCache::key(const Scene& scene) {
   const json& root = scene.document.root;
-  const json mesh = root.value("mesh", json());
-  // A mesh refined along the needle's path (refine_along_needle) depends on the needle's section too.
-  const bool along_needle = mesh.is_object() && mesh.value("refine_along_needle", false);
-  return json::array({scene.document.directory().string(), mesh, root.value("shape_function", json()),
-                      root.value("discretisation", json()), along_needle ? root.value("needle", json()) : json()})
+  return json::array({scene.document.directory().string(), root.value("mesh", json()),
+                      root.value("shape_function", json()), root.value("discretisation", json())})
       .dump();
 }
 
-std::shared_ptr<const MeshlessBasis> BasisCache::find(const Scene& scene) const {
+std::shared_ptr<const MeshlessBasis> BasisCache::find(
+    const Scene& scene, const std::function<std::optional<PlannedPath>()>& needle_path) const {
   if (scene.backend) return nullptr;
   const std::lock_guard lock(mutex_);
-  const auto it = bases_.find(key(scene));
-  return it == bases_.end() ? nullptr : it->second;
+  std::optional<std::optional<PlannedPath>> path;  // the scene's, once asked
+  const auto [first, last] = bases_.equal_range(key(scene));
+  for (auto it = first; it != last; ++it) {
+    const MeshInputs& inputs = it->second.inputs;
+    if (!inputs.asked_needle_path) return it->second.basis;
+    if (!path) path = needle_path ? needle_path() : std::nullopt;
+    if (*path == inputs.needle_path) return it->second.basis;
+  }
+  return nullptr;
 }
 
-void BasisCache::keep(const Scene& scene, std::shared_ptr<const MeshlessBasis> basis) {
+void BasisCache::keep(const Scene& scene, std::shared_ptr<const MeshlessBasis> basis, MeshInputs inputs) {
   if (scene.backend) return;
   const std::lock_guard lock(mutex_);
-  bases_.emplace(key(scene), std::move(basis));
+  bases_.emplace(key(scene), Kept{std::move(inputs), std::move(basis)});
 }
 
 std::size_t BasisCache::size() const {
@@ -124,12 +140,13 @@ MechanicalSystem::MechanicalSystem(const Scene& scene, PluginCatalog& catalog, B
 }
 
 void MechanicalSystem::build_discretisation(const Scene& scene, PluginCatalog& catalog, BasisCache* bases) {
-  if (auto basis = bases ? bases->find(scene) : nullptr) {
+  if (auto basis = bases ? bases->find(scene, needle_path_of(scene, catalog)) : nullptr) {
     auto materials = region_materials(scene, catalog, basis->mesh);
     discretisation_ = std::make_unique<Discretisation>(std::move(basis), std::move(materials), 0);
     log().debug("discretisation: the basis built for an earlier run of this mesh");
   } else {
-    TetMesh mesh = load_scene_mesh(scene, catalog);
+    MeshInputs inputs;
+    TetMesh mesh = load_scene_mesh(scene, catalog, &inputs);
     auto materials = region_materials(scene, catalog, mesh);
     Discretisation::Options options;
     options.cell_groups = engine_->cell_groups(mesh);
@@ -140,7 +157,7 @@ void MechanicalSystem::build_discretisation(const Scene& scene, PluginCatalog& c
     options.precision =
         discretisation.precision == "single" ? RowPrecision::single_precision : RowPrecision::double_precision;
     discretisation_ = std::make_unique<Discretisation>(std::move(mesh), shape_functions, std::move(materials), options);
-    if (bases) bases->keep(scene, discretisation_->basis());
+    if (bases) bases->keep(scene, discretisation_->basis(), std::move(inputs));
   }
   kernel_ = std::make_unique<ForceKernel>(
       *discretisation_, scene.volumetric ? build_component<VolumetricTreatment>(catalog, *scene.volumetric) : nullptr);

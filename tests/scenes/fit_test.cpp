@@ -13,6 +13,7 @@
 
 #include "in_process_run.hpp"
 #include "mtled/errors.hpp"
+#include "mtled/simulation.hpp"
 #include "test_support.hpp"
 #include "xml_check.hpp"
 
@@ -367,6 +368,71 @@ TEST(Fit, InProcessRunsShareTheBasisAndPredictAsChildRunsDo) {
     EXPECT_EQ(log.find("the basis built for an earlier run") != std::string::npos, p > 0) << log;
     expect_contains(log, "done:");  // the run's messages in its own folder, as a child's
   }
+}
+
+// A mesh refined along the needle's planned path is shared by the runs whose needle plans that path (a fit of C_D or
+// the puncture strain builds one basis) and built again for a needle going elsewhere (a fit of the depth); a mesh
+// that does not refine along the needle is shared whatever the needle does.
+TEST(Fit, AMeshRefinedAlongTheNeedleIsSharedWhileThePathStays) {
+  const json needle = {{"type", "kinematic"},
+                       {"entry", {0.001, 0.0, 0.01}},
+                       {"direction", {0, 0, -1}},
+                       {"depth", 0.006},
+                       {"deformation_coefficient", 0.5}};
+  const auto basis_of = [](json scene, BasisCache& bases) {
+    Simulation simulation(validate_scene(parse_scene(scene.dump(), "refined.json"), catalog()), catalog(), &bases);
+    return simulation.system().discretisation().basis();
+  };
+  for (const bool along : {true, false}) {
+    json scene = gel_cylinder_scene(0.01, needle);
+    if (along) {
+      scene["mesh"]["refine_along_needle"] = true;
+      scene["mesh"]["refine_size"] = 0.0007;
+    }
+    json other_coefficient = scene, other_depth = scene;
+    other_coefficient["needle"]["deformation_coefficient"] = 0.3;
+    other_depth["needle"]["depth"] = 0.004;
+    BasisCache bases;
+    const auto first = basis_of(scene, bases);
+    EXPECT_EQ(basis_of(other_coefficient, bases), first) << "along the needle: " << along;
+    EXPECT_EQ(basis_of(other_depth, bases) == first, !along) << "along the needle: " << along;
+    EXPECT_EQ(bases.size(), along ? 2u : 1u);
+  }
+}
+
+// A fit writes each experiment's mesh once, except where a fitted parameter may change it: one under /mesh, or one
+// under /needle when the mesh is refined along the needle's path (the runs then mesh along their own needle).
+TEST(Fit, AMeshRefinedAlongAFittedNeedleIsNotWrittenOnce) {
+  const fs::path folder = scratch_dir("fit-mesh-along-needle");
+  const json needle = {{"type", "kinematic"},
+                       {"entry", {0.001, 0.0, 0.01}},
+                       {"direction", {0, 0, -1}},
+                       {"depth", 0.006},
+                       {"deformation_coefficient", 0.4}};
+  json along = gel_cylinder_scene(0.01, needle);
+  along["mesh"]["refine_along_needle"] = true;
+  along["mesh"]["refine_size"] = 0.0007;
+  write_text(folder / "along.json", along.dump(2));
+  write_text(folder / "plain.json", gel_cylinder_scene(0.01, needle).dump(2));
+  write_text(folder / "force.csv", "depth_m,force_N\n0.003,0.01\n0.006,0.02\n");
+  json file = {{"parameters",
+                {{{"name", "C_D"},
+                  {"pointer", "/needle/deformation_coefficient"},
+                  {"lower", 0.05},
+                  {"upper", 0.9},
+                  {"start", 0.4}}}},
+               {"experiments", json::array()}};
+  for (const std::string name : {"along", "plain"})
+    file["experiments"].push_back({{"name", name},
+                                   {"scene", name + ".json"},
+                                   {"data", "force.csv"},
+                                   {"compare", "needle_force"},
+                                   {"sigma", 1e-3}});
+  write_text(folder / "fit.json", file.dump(2));
+  fit::Plan plan = fit::read(folder / "fit.json", {}, {plugin_dir()});
+  fit::write_meshes_once(plan, folder / "out", {plugin_dir()});
+  EXPECT_TRUE(plan.experiments[0].mesh_file.empty()) << plan.experiments[0].mesh_file;
+  EXPECT_TRUE(fs::exists(plan.experiments[1].mesh_file)) << plan.experiments[1].mesh_file;
 }
 
 // A forward run in the fit's process still going after timeout_s is stopped and recorded as "timeout", as a child

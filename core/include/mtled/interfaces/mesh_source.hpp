@@ -15,6 +15,10 @@ namespace mtled {
 struct PlannedPath {
   Vec3 entry = Vec3::Zero(), tip = Vec3::Zero();
   std::string frame;
+
+  bool operator==(const PlannedPath& other) const {
+    return entry == other.entry && tip == other.tip && frame == other.frame;
+  }
 };
 
 struct MeshContext {
