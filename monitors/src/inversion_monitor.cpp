@@ -31,8 +31,7 @@ void InversionMonitor::declare(ComponentDeclaration& d) {
           "points); with J > 0 there the field turns within it more than its corners follow (a rolled rim), counted "
           "as bent (monitors.inversion.bent_tets), not a fold. Tets around the needle's path (a vertex within the "
           "needle's radius plus that node's support radius of the swept shaft) fold because the kinematic needle "
-          "cannot cut the tissue: they are counted as cut (monitors.inversion.cut_tets). Slivers (radius ratio under "
-          "0.1; the shipped scenes' meshes have none) are not judged (monitors.inversion.slivers_inverted)")
+          "cannot cut the tissue: they are counted as cut (monitors.inversion.cut_tets)")
       .to<&Settings::inversion>();
 }
 
@@ -65,10 +64,6 @@ bool in_needle_zone(const Discretisation& model, Index t, const NeedleStatus& ne
   return false;
 }
 
-}  // namespace
-
-namespace {
-
 // The smallest J of the displacement field inside tet t: at its centroid and the four points of the degree-2 rule,
 // all inside it (on its faces the field may lie on the body's surface, where MLS is least accurate and a bonded rim's
 // exact gradient is singular). NaN when no support covers a point.
@@ -88,12 +83,6 @@ double smallest_jacobian_inside(const Discretisation& model, Index t, std::span<
 InversionMonitor::Census InversionMonitor::classify(const StepRecord& step) {
   const Discretisation& model = *run_->discretisation;
   const auto& mesh = model.mesh();
-  if (sliver_.empty()) {
-    sliver_.resize(static_cast<std::size_t>(mesh.tet_count()));
-    // A sliver (mesh.hpp) is too thin to judge (the shipped scenes' worst tets have 0.21 to 0.30, a regular one 1).
-    for (Index t = 0; t < mesh.tet_count(); ++t)
-      sliver_[static_cast<std::size_t>(t)] = tet_radius_ratio(mesh, t) < kSliverRadiusRatio;
-  }
   interpolated_.resize(step.u.size());
   kinds_.assign(static_cast<std::size_t>(mesh.tet_count()), TetState::whole);
   model.interpolate(step.u, interpolated_);
@@ -105,16 +94,12 @@ InversionMonitor::Census InversionMonitor::classify(const StepRecord& step) {
     const double volume = (moved(v[1]) - a).cross(moved(v[2]) - a).dot(moved(v[3]) - a) / 6.0;
     const double ratio = volume / tet_volume(mesh, t);
     if (ratio > 0.0) {
-      if (!sliver_[static_cast<std::size_t>(t)]) census.smallest = std::min(census.smallest, ratio);
+      census.smallest = std::min(census.smallest, ratio);
       continue;
     }
     TetState& state = kinds_[static_cast<std::size_t>(t)];
     if (needle && in_needle_zone(model, t, *step.needle)) {
       state = TetState::cut, ++census.cut;
-      continue;
-    }
-    if (sliver_[static_cast<std::size_t>(t)]) {
-      state = TetState::sliver, ++census.slivers;
       continue;
     }
     census.smallest = std::min(census.smallest, ratio);
@@ -142,7 +127,6 @@ void InversionMonitor::check(const StepRecord& step) {
   ++checks_;
   last_checked_ = step.load.step;
   cut_tets_ = std::max(cut_tets_, census.cut);
-  slivers_inverted_ = std::max(slivers_inverted_, census.slivers);
   if (census.bent > 0 && bent_tets_ == 0)
     log().info(
         "step {}: {} background tets turned inside out by their vertices' displacements alone: the field stays whole "
@@ -270,8 +254,6 @@ json InversionMonitor::report() const {
                  {"action", stop_ ? "stop" : "warn"},
                  {"inverted_tets", inverted_tets_},
                  {"cut_tets", cut_tets_},
-                 {"slivers", std::count(sliver_.begin(), sliver_.end(), 1)},
-                 {"slivers_inverted", slivers_inverted_},
                  {"bent_tets", bent_tets_},
                  {"bent_smallest_jacobian",
                   std::isfinite(smallest_bent_jacobian_) ? json(smallest_bent_jacobian_) : json(nullptr)},

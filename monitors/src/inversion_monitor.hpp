@@ -4,12 +4,12 @@
 // closer, as the integration points' J cannot show a fold between them:
 // - in the needle's zone (a vertex within the needle's radius plus its support radius of the swept shaft) it is cut:
 //   the kinematic needle cannot cut the tissue, so the tets around its path fold ("cut_tets" in summary.json);
-// - a sliver (radius ratio under 0.1) is not judged;
 // - otherwise the displacement field itself is read inside the tet (its centroid and the degree-2 rule's four
 //   points): J <= 0 at one of them is a fold of the material between integration points (a driver pushed nodes
 //   through it); J > 0 at all of them means the field turns within the tet further than its four corners can follow
-//   (a rolled rim, a sliver-like tet in a relaxation's transient), counted as bent, not as a fold. A fold of the
-//   material turns the field inside out; the tet's straight edges may turn over without one.
+//   (a rolled rim, a sliver in a relaxation's transient, whose corners turn over as soon as the field departs from
+//   an affine one by its thickness), counted as bent, not as a fold. A fold of the material turns the field inside
+//   out; the tet's straight edges may turn over without one.
 // /monitors/inversion says what a fold does: "stop" (the default) ends the run (InstabilityError
 // "inverted_between_points"), "warn" logs it once and records it in summary.json.
 #include <cmath>
@@ -69,12 +69,12 @@ class InversionMonitor final : public StepMonitor {
 
  private:
   void check(const StepRecord& step);
-  // One check's findings over the tets turned over by their vertices (the smallest volume ratio over all but cut tets
-  // and slivers; `worst` the folded tet with the smallest J inside, `worst_ratio` its moved volume ratio).
+  // One check's findings over the tets turned over by their vertices (the smallest volume ratio over all but cut
+  // tets; `worst` the folded tet with the smallest J inside, `worst_ratio` its moved volume ratio).
   struct Census {
     double smallest = INFINITY, folded_jacobian = INFINITY, bent_jacobian = INFINITY, worst_ratio = 0.0;
     Index worst = 0;
-    long folded = 0, bent = 0, cut = 0, slivers = 0;
+    long folded = 0, bent = 0, cut = 0;
   };
   // Moves the tets by the interpolated displacements of state `step` and sorts those turned over (kinds_).
   Census classify(const StepRecord& step);
@@ -82,7 +82,7 @@ class InversionMonitor final : public StepMonitor {
   // The stop: where the fold is against the needle, how far it went, and the lever that applies.
   [[noreturn]] void stop(const StepRecord& step, const Census& census, Index node, Vec3 moved_by) const;
   // What a tet turned over by its vertices' displacements is, at the last check (whole: not turned over).
-  enum class TetState : char { whole, cut, sliver, bent, folded };
+  enum class TetState : char { whole, cut, bent, folded };
 
   const RunContext* run_ = nullptr;
   long every_;
@@ -91,11 +91,9 @@ class InversionMonitor final : public StepMonitor {
   std::shared_ptr<FoldedTets> folded_;  // filled when the check stops a run (last_good_state.vtu's "folded")
   long checks_ = 0, last_checked_ = -1, inverted_tets_ = 0, first_inverted_at_ = 0;
   long cut_tets_ = 0;                 // the most inverted tets the needle's shaft crossed at any check
-  long slivers_inverted_ = 0;         // the most inverted slivers at any check (not judged)
   long bent_tets_ = 0;                // the most tets turned over with the field whole inside them, at any check
   double smallest_bent_jacobian_ = INFINITY;  // the field's smallest J inside those, over the run
   std::vector<TetState> kinds_;               // per tet, at the last check
-  std::vector<char> sliver_;          // per tet: too thin to judge (radius ratio under 0.1)
   double smallest_ratio_ = INFINITY;  // the smallest moved volume over reference volume of any tet
   long smallest_at_ = 0;
   std::vector<double> interpolated_;
