@@ -5,7 +5,9 @@
   assignment left out; each overload counts);
 - the per-step record `StepRecord` has at most 10 fields and no hooks (std::function) or pointers;
 - core/'s import graph has no two-way ties: no group of core's files (a header with its .cpp) that include each
-  other, directly or through others.
+  other, directly or through others;
+- MPI stays inside its plugin: nothing in core/, apps/, analysis/, io/ or monitors/ includes mpi.h or tests
+  MTLED_WITH_MPI, and the run command (apps/mtled/run_command.cpp) stays at most 150 lines.
 
 Usage: kernel_shape.py SOURCE_ROOT. Prints what it counted; exit status 1 when a rule is broken.
 """
@@ -15,6 +17,8 @@ import sys
 
 MAX_PUBLIC_FUNCTIONS = {"Discretisation": 15, "Simulation": 15}
 MAX_RECORD_FIELDS = 10
+MAX_RUN_COMMAND_LINES = 150
+OUTSIDE_THE_MPI_PLUGIN = ["core", "apps", "analysis", "io", "monitors"]
 
 
 def without_comments(text):
@@ -141,6 +145,17 @@ def main(root):
     print(f"core's import graph: {len(cycles)} two-way ties")
     for group in cycles:
         failures.append(f"core's files {', '.join(group)} include each other")
+    mpi = [str(path.relative_to(root)) for folder in OUTSIDE_THE_MPI_PLUGIN for path in (root / folder).rglob("*")
+           if path.suffix in (".cpp", ".hpp", ".h", ".txt") and
+           re.search(r"#\s*include\s*[<\"]mpi\.h|MTLED_WITH_MPI", path.read_text(errors="replace"))]
+    print(f"outside the MPI plugin: {len(mpi)} files naming MPI")
+    for path in mpi:
+        failures.append(f"{path} includes mpi.h or tests MTLED_WITH_MPI: MPI belongs in plugins/backends/mpi")
+    run_command = root / "apps/mtled/run_command.cpp"
+    lines = len(run_command.read_text().splitlines())
+    print(f"run_command.cpp: {lines} lines")
+    if lines > MAX_RUN_COMMAND_LINES:
+        failures.append(f"run_command.cpp has {lines} lines, more than {MAX_RUN_COMMAND_LINES}")
     for failure in failures:
         print("FAIL:", failure)
     return 1 if failures else 0
