@@ -58,11 +58,10 @@ class FlatPunchNeedle final : public NeedleModel {
   std::vector<NodalConstraints*> constraints() override { return {&bonded_}; }
 
   NeedleStatus status() const override {
-    NeedleStatus s;
-    s.depth = depth_;
+    NeedleStatus s = path_.status(depth_, std::nullopt);  // the shaft; indentation for ever (no puncture depth)
     for (const Vec3& r : bonded_.reactions) s.force += r.dot(path_.direction);  // reactions on the body, along the axis
     s.driven_nodes = static_cast<Index>(bonded_.size());
-    return s;  // phase: indentation, for ever (puncture_depth stays negative)
+    return s;
   }
 
  private:

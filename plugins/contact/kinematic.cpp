@@ -163,18 +163,12 @@ class KinematicNeedle final : public NeedleModel {
 
   std::optional<PlannedPath> planned_path() const override { return path_.planned(); }
   NeedleStatus status() const override {
-    NeedleStatus s;
-    s.depth = depth_;
+    NeedleStatus s = path_.status(depth_, punctured_ ? std::optional(puncture_depth_) : std::nullopt);
     double force = 0.0;
     for (const DrivenSet* set : {&nodes_, &shaft_})
       for (const auto& r : set->constraints.reactions) force += r.dot(path_.direction);
     s.force = force;
-    s.phase = punctured_ ? NeedlePhase::penetration : NeedlePhase::indentation;
-    s.puncture_depth = punctured_ ? puncture_depth_ : -1.0;
     s.driven_nodes = static_cast<Index>(nodes_.constraints.size() + shaft_.constraints.size());
-    s.entry = path_.entry;
-    s.direction = path_.direction;
-    s.radius = path_.radius;
     return s;
   }
 

@@ -244,15 +244,9 @@ class RigidContactNeedle final : public NeedleModel {
 
   std::optional<PlannedPath> planned_path() const override { return path_.planned(); }
   NeedleStatus status() const override {
-    NeedleStatus s;
-    s.depth = depth_;
+    NeedleStatus s = path_.status(depth_, punctured_ ? std::optional(puncture_depth_) : std::nullopt);
     s.force = axial_force();
-    s.phase = punctured_ ? NeedlePhase::penetration : NeedlePhase::indentation;
-    s.puncture_depth = punctured_ ? puncture_depth_ : -1.0;
     s.driven_nodes = static_cast<Index>(contacts_.size());
-    s.entry = path_.entry;
-    s.direction = path_.direction;
-    s.radius = path_.radius;
     return s;
   }
 

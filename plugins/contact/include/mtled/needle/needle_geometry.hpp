@@ -28,6 +28,18 @@ struct NeedlePath {
   Vec3 tip(double advance) const { return entry + advance * direction; }
   // From the entry to the tip at the final depth: what a mesh refines along (refine_along_needle).
   PlannedPath planned() const { return {entry, tip(depth), frame}; }
+  // What a needle model's status() says of the path and the puncture (puncture_depth: where it punctured, if it has);
+  // the model adds its force and driven nodes.
+  NeedleStatus status(double advance, std::optional<double> puncture_depth) const {
+    NeedleStatus s;
+    s.depth = advance;
+    s.phase = puncture_depth ? NeedlePhase::penetration : NeedlePhase::indentation;
+    s.puncture_depth = puncture_depth.value_or(-1.0);
+    s.entry = entry;
+    s.direction = direction;
+    s.radius = radius;
+    return s;
+  }
 };
 
 // Declares diameter, entry, direction, depth and trajectory (shared by all needle models), bound to
