@@ -432,18 +432,19 @@ bool Discretisation::shape_functions_at(const Vec3& x, std::vector<Index>& nodes
       .ok;
 }
 
-std::optional<Mat3> field_deformation_gradient(const Discretisation& discretisation, const Vec3& X,
-                                               std::span<const double> u) {
+std::optional<FieldSample> field_at(const Discretisation& discretisation, const Vec3& X, std::span<const double> u) {
   std::vector<Index> nodes;
   std::vector<double> values;
   std::vector<Vec3> gradients;
   if (!discretisation.shape_functions_at(X, nodes, values, &gradients)) return std::nullopt;
-  Mat3 F = Mat3::Identity();
+  FieldSample sample{Vec3::Zero(), Mat3::Identity()};
   for (std::size_t k = 0; k < nodes.size(); ++k) {
     const double* u_k = u.data() + 3 * static_cast<std::size_t>(nodes[k]);
-    F += Vec3(u_k[0], u_k[1], u_k[2]) * gradients[k].transpose();
+    const Vec3 u_node(u_k[0], u_k[1], u_k[2]);
+    sample.displacement += values[k] * u_node;
+    sample.deformation_gradient += u_node * gradients[k].transpose();
   }
-  return F;
+  return sample;
 }
 
 Vec3 test_gradient(const Discretisation& discretisation, Index ip, int k) {

@@ -70,8 +70,8 @@ bool in_needle_zone(const Discretisation& model, Index t, const NeedleStatus& ne
 double smallest_jacobian_inside(const Discretisation& model, Index t, std::span<const double> u) {
   double smallest = INFINITY;
   const auto sample = [&](const Vec3& x) {
-    const auto F = field_deformation_gradient(model, x, u);
-    smallest = F ? std::min(smallest, F->determinant()) : NAN;
+    const auto field = field_at(model, x, u);
+    smallest = field ? std::min(smallest, field->deformation_gradient.determinant()) : NAN;
   };
   sample(tet_centroid(model.mesh(), t));
   for (const Vec3& x : tet_quadrature_points(model.mesh(), t)) sample(x);

@@ -292,10 +292,11 @@ TEST(Discretisation, RigidMotionsCarryNoForce) {
   EXPECT_NEAR(model->kernel.strain_energy(u), 0.0, 1e-18);
 }
 
-// The field's F anywhere (what the fold check reads between integration points): exact for an affine field (linear
-// reproduction), the integration point's own F at its position, and the central difference of the interpolated field
-// elsewhere, to the difference's truncation error (h = 1e-6 m on 2.5 mm supports: relative O(1e-7)).
-TEST(Discretisation, TheFieldsDeformationGradientAnywhereIsItsDerivative) {
+// The field anywhere (what the fold check reads between integration points, and Python's Run.field_at): exact for an
+// affine field (linear reproduction); elsewhere its displacement is the shape functions' sum, equal at a node to the
+// node's interpolation row, and its F the integration point's own at its position and the central difference of the
+// interpolated field between, to the difference's truncation error (h = 1e-6 m on 2.5 mm supports: relative O(1e-7)).
+TEST(Discretisation, TheFieldAnywhereIsItsInterpolationAndFItsDerivative) {
   const auto model = make_model("mmls");
   const Discretisation& d = model->discretisation;
   Mat3 H;
@@ -308,7 +309,7 @@ TEST(Discretisation, TheFieldsDeformationGradientAnywhereIsItsDerivative) {
   const std::vector<double> wavy = random_field(d.node_count(), 2e-4, 11);
   std::mt19937 random(5);
   std::uniform_real_distribution<double> inside(0.001, 0.009);
-  const auto field_at = [&](const Vec3& x, const std::vector<double>& u) {
+  const auto interpolated = [&](const Vec3& x, const std::vector<double>& u) {
     std::vector<Index> nodes;
     std::vector<double> values;
     EXPECT_TRUE(d.shape_functions_at(x, nodes, values));
@@ -320,23 +321,33 @@ TEST(Discretisation, TheFieldsDeformationGradientAnywhereIsItsDerivative) {
   };
   for (int trial = 0; trial < 20; ++trial) {
     const Vec3 x(inside(random), inside(random), inside(random));
-    const auto F = field_deformation_gradient(d, x, affine);
-    ASSERT_TRUE(F);
-    EXPECT_LT((*F - Mat3::Identity() - H).norm(), 1e-10) << *F;
-    const auto G = field_deformation_gradient(d, x, wavy);
-    ASSERT_TRUE(G);
+    const auto exact = field_at(d, x, affine);
+    ASSERT_TRUE(exact);
+    EXPECT_LT((exact->deformation_gradient - Mat3::Identity() - H).norm(), 1e-10) << exact->deformation_gradient;
+    EXPECT_LT((exact->displacement - H * x - Vec3(0.001, 0.002, -0.001)).norm(), 1e-12) << exact->displacement;
+    const auto sample = field_at(d, x, wavy);
+    ASSERT_TRUE(sample);
+    EXPECT_LT((sample->displacement - interpolated(x, wavy)).norm(), 1e-12 * 2e-4) << x;
+    const Mat3& G = sample->deformation_gradient;
     constexpr double h = 1e-6;
     Mat3 difference = Mat3::Identity();
     for (int j = 0; j < 3; ++j)
-      difference.col(j) += (field_at(x + h * Vec3::Unit(j), wavy) - field_at(x - h * Vec3::Unit(j), wavy)) / (2 * h);
-    EXPECT_LT((*G - difference).norm(), 1e-6 * (*G - Mat3::Identity()).norm()) << *G << "\n" << difference;
+      difference.col(j) +=
+          (interpolated(x + h * Vec3::Unit(j), wavy) - interpolated(x - h * Vec3::Unit(j), wavy)) / (2 * h);
+    EXPECT_LT((G - difference).norm(), 1e-6 * (G - Mat3::Identity()).norm()) << G << "\n" << difference;
   }
   for (Index ip = 0; ip < d.points().count(); ip += 37) {
-    const auto F = field_deformation_gradient(d, d.points().positions[ip], wavy);
-    ASSERT_TRUE(F);
-    EXPECT_LT((*F - d.deformation_gradient(ip, wavy)).norm(), 1e-12) << ip;
+    const auto sample = field_at(d, d.points().positions[ip], wavy);
+    ASSERT_TRUE(sample);
+    EXPECT_LT((sample->deformation_gradient - d.deformation_gradient(ip, wavy)).norm(), 1e-12) << ip;
   }
-  EXPECT_FALSE(field_deformation_gradient(d, Vec3(0.5, 0.5, 0.5), wavy));  // far outside every support
+  // At a node, the displacement its interpolation row gives (the one result.vtu holds).
+  for (Index node = 0; node < d.node_count(); node += 11) {
+    const auto sample = field_at(d, d.nodes()[node], wavy);
+    ASSERT_TRUE(sample);
+    EXPECT_LT((sample->displacement - d.interpolate_node(node, wavy)).norm(), 1e-12 * 2e-4) << node;
+  }
+  EXPECT_FALSE(field_at(d, Vec3(0.5, 0.5, 0.5), wavy));  // far outside every support
 }
 
 // Largest |dE/du_i - f_i| over every `stride`-th unknown, by central differences with h = 1e-8 m on u ~ 1e-4 m

@@ -156,10 +156,14 @@ class Discretisation {
 // xi_I - mean over ip's support of xi_J, what the internal forces multiply the stress by (f_I = sum_p w_p P_p t_pI).
 Vec3 test_gradient(const Discretisation& discretisation, Index ip, int k);
 
-// F = I + sum_I u_I (x) grad N_I at any point X of the reference body (the field itself, between the integration
-// points, where Discretisation::deformation_gradient gives a point's own); nullopt if no support covers X.
-std::optional<Mat3> field_deformation_gradient(const Discretisation& discretisation, const Vec3& X,
-                                               std::span<const double> u);
+// The displacement field of nodal parameters u at any point X of the reference body (between the nodes and the
+// integration points): u(X) = sum_I N_I(X) u_I and F = I + sum_I u_I (x) grad N_I (Discretisation::deformation_gradient
+// gives an integration point's own); nullopt if no support covers X.
+struct FieldSample {
+  Vec3 displacement;
+  Mat3 deformation_gradient;
+};
+std::optional<FieldSample> field_at(const Discretisation& discretisation, const Vec3& X, std::span<const double> u);
 
 // How much stiffer each integration point's material is at the displacement u than at rest: the largest eigenvalue
 // of its tangent dP/dF at u over that at F = I, at least 1 (a softer point, or one whose F the law refuses, gets 1).
