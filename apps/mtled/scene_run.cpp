@@ -87,10 +87,9 @@ int SceneRun::unstable(const InstabilityError& e) {
   const bool inverted = e.diagnostic().what == "inverted_material";
   std::vector<CellField> folds;
   if (folded_ && !folded_->per_tet.empty()) folds.push_back({"folded", 1, folded_->per_tet});
-  written_displacement_ =
-      write_state(folder_, "last_good_state.vtu", simulation_->system().force_kernel(),
-                  inverted ? simulation_->system().previous_displacement() : simulation_->system().displacement(),
-                  scene_.section("output"), false, folds);
+  written_state_ = inverted ? simulation_->system().previous_displacement() : simulation_->system().displacement();
+  written_displacement_ = write_state(folder_, "last_good_state.vtu", simulation_->system().force_kernel(),
+                                      written_state_, scene_.section("output"), false, folds);
   // An inverted point beside the needle: where, against the needle, and what the scene can still do about it.
   Diagnostic diagnostic = e.diagnostic();
   const auto needle =
@@ -148,8 +147,9 @@ void SceneRun::write_displacement_field() const {
 // result.vtu (and the displacement field the output section asks for), then summary.json with status "ok": the
 // needle, the reactions and the error indicators.
 int SceneRun::succeeded(double solve_time) {
-  written_displacement_ = write_state(folder_, "result.vtu", simulation_->system().force_kernel(),
-                                      simulation_->system().displacement(), scene_.section("output"), true);
+  written_state_ = simulation_->system().displacement();
+  written_displacement_ = write_state(folder_, "result.vtu", simulation_->system().force_kernel(), written_state_,
+                                      scene_.section("output"), true);
   try {
     write_displacement_field();
   } catch (const InputError& e) {

@@ -38,12 +38,14 @@ class SceneRun {
   // an OutputWriter is finished like the writers when the run stops unstable.
   int run(const std::vector<std::shared_ptr<StepMonitor>>& observers);
 
-  // After run(): the simulation in its final state (null when setting it up failed), summary.json as written, and
-  // the interpolated displacement of the state the run wrote, result.vtu or last_good_state.vtu (3 per node; empty
-  // when it wrote neither).
+  // After run(): the simulation in its final state (null when setting it up failed), summary.json as written, the
+  // interpolated displacement of the state the run wrote, result.vtu or last_good_state.vtu (3 per node; empty when it
+  // wrote neither), and that state's nodal parameters u_I (the simulation's; empty likewise), from which the field is
+  // read anywhere (field_at).
   const Simulation* simulation() const { return simulation_.get(); }
   const json& summary() const { return summary_.contents(); }
   std::span<const double> written_displacement() const { return written_displacement_; }
+  std::span<const double> written_state() const { return written_state_; }
   const std::filesystem::path& folder() const { return folder_.path(); }
 
  private:
@@ -67,6 +69,7 @@ class SceneRun {
   std::shared_ptr<const FoldedTets> folded_;  // marked by the inversion check when it stops the run
   std::vector<std::shared_ptr<OutputWriter>> writers_;
   std::vector<double> written_displacement_;
+  std::span<const double> written_state_;
 };
 
 }  // namespace mtled::app

@@ -80,6 +80,13 @@ class Step(NamedTuple):
     displacement: numpy.ndarray
 
 
+class Field(NamedTuple):
+    """The displacement field at some points: `displacement` (n, 3) in m and the deformation gradient F
+    `deformation_gradient` (n, 3, 3), each row NaN where no node's support covers its point."""
+    displacement: numpy.ndarray
+    deformation_gradient: numpy.ndarray
+
+
 class Run:
     """A finished run, its folder as `mtled run` writes it. nodes, displacement and reactions are read-only NumPy views
     of mtled's memory, alive as long as the Run is."""
@@ -123,6 +130,13 @@ class Run:
         rows = numpy.genfromtxt(table, delimiter=",", names=True, dtype=None, encoding="utf-8", ndmin=1)
         return {"time": numpy.asarray(rows["time_s"], dtype=float), "depth": numpy.asarray(rows["depth_m"], dtype=float),
                 "force": numpy.asarray(rows["force_N"], dtype=float), "phase": [str(p) for p in rows["phase"]]}
+
+    def field_at(self, points) -> Field:
+        """The meshless displacement field of the state the run wrote (result.vtu's, or last_good_state.vtu's) at
+        `points`, an (n, 3) array of reference coordinates in m (the mesh's frame): u(X) = sum_I N_I(X) u_I and
+        F = I + grad u, the field itself between the nodes, not result.vtu's linear interpolation over the tets."""
+        displacement, deformation_gradient = self._handle.field_at(numpy.asarray(points, dtype=float))
+        return Field(displacement, deformation_gradient)
 
     def __repr__(self):
         return f"mtled.Run({str(self.folder)!r}, status={self.status!r})"

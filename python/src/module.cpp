@@ -2,17 +2,20 @@
 // a run in this process with a Python callback between steps, and the run's state as read-only NumPy arrays over
 // mtled's own memory. The GIL is released while a run steps and re-taken for the callback.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 
 #include "commands.hpp"
 #include "in_process_run.hpp"
 #include "mtled/analysis/compare.hpp"
+#include "mtled/discretisation.hpp"
 #include "mtled/log.hpp"
 #include "mtled/version.hpp"
 #include "processes.hpp"
@@ -66,6 +69,36 @@ py::array rows_of_three(const double* values, std::size_t count, py::handle owne
 
 py::array rows_of_three(const std::vector<Vec3>& points, py::handle owner) {
   return rows_of_three(points.empty() ? nullptr : points.front().data(), 3 * points.size(), owner);
+}
+
+// The field of a run's written state at each of `points` ((n, 3), m, in the reference body): its displacement (n, 3)
+// and F (n, 3, 3), NaN where no node's support covers a point.
+py::tuple field_at_points(const InProcessRun& r,
+                          const py::array_t<double, py::array::c_style | py::array::forcecast>& points) {
+  if (points.ndim() != 2 || points.shape(1) != 3)
+    throw py::value_error(
+        fmt::format("field_at: points must be an (n, 3) array of coordinates (m), not of shape ({})",
+                    fmt::join(std::vector<py::ssize_t>(points.shape(), points.shape() + points.ndim()), ", ")));
+  const std::span<const double> state = r.run().written_state();
+  if (state.empty()) throw py::value_error("field_at: the run wrote no state (result.vtu or last_good_state.vtu)");
+  const auto n = points.shape(0);
+  py::array_t<double> displacement({n, py::ssize_t{3}});
+  py::array_t<double> gradient({n, py::ssize_t{3}, py::ssize_t{3}});
+  const double* x = points.data();
+  double* u_out = displacement.mutable_data();
+  double* f_out = gradient.mutable_data();
+  {
+    const py::gil_scoped_release released;
+    const Discretisation& discretisation = r.simulation().system().discretisation();
+    for (py::ssize_t p = 0; p < n; ++p) {
+      const auto sample = field_at(discretisation, Vec3(x[3 * p], x[3 * p + 1], x[3 * p + 2]), state);
+      for (int i = 0; i < 3; ++i) {
+        u_out[3 * p + i] = sample ? sample->displacement[i] : NAN;
+        for (int j = 0; j < 3; ++j) f_out[9 * p + 3 * i + j] = sample ? sample->deformation_gradient(i, j) : NAN;
+      }
+    }
+  }
+  return py::make_tuple(displacement, gradient);
 }
 
 py::object from_json(const json& value) { return py::module_::import("json").attr("loads")(value.dump()); }
@@ -192,7 +225,8 @@ void bind_run(py::module_& m) {
                                return rows_of_three(u.data(), u.size(), self);
                              })
       .def_property_readonly("reactions",
-                             [](py::object self) { return reactions(self.cast<const InProcessRun&>(), self); });
+                             [](py::object self) { return reactions(self.cast<const InProcessRun&>(), self); })
+      .def("field_at", &field_at_points, "points"_a);
   m.def("run", &run_scene, "scene"_a, "output"_a, "threads"_a, "every"_a, "callback"_a, "plugin_paths"_a,
         "hold_sigint"_a);
   m.def("request_interrupt", [](bool requested) { interrupt_requested = requested; });

@@ -230,6 +230,46 @@ def test_a_fit_from_python_recovers_ogdens_mu_from_a_compression_curve(tmp_path)
     assert abs(mu["value"] - 722.0) < 0.02 * 722.0, mu
 
 
+def lateral_stretch(mu: float, D: float, axial: float) -> float:
+    """The neo-Hookean (the paper's eq. 1 with alpha = 2) uniaxial solution's free lateral stretch: where the lateral
+    nominal stress, a central difference of the energy, vanishes (bisection; scripts/uniaxial_exact.py's method)."""
+    def energy(stretches):
+        J = stretches[0] * stretches[1] * stretches[2]
+        return mu / 2 * sum((J ** (-1 / 3) * s) ** 2 - 1 for s in stretches) + (J - 1) ** 2 / D
+
+    def lateral_stress(s, h=1e-6):
+        return (energy([s + h, s, axial]) - energy([s - h, s, axial])) / (2 * h)
+
+    low, high = 0.5, 2.0
+    for _ in range(200):
+        middle = (low + high) / 2
+        low, high = (low, middle) if lateral_stress(middle) > 0 else (middle, high)
+    return low
+
+
+def test_the_field_anywhere_is_the_exact_homogeneous_one_on_the_uniaxial_cube(tmp_path):
+    """Run.field_at reads the meshless field between the nodes. The neo-Hookean cube compressed to 0.8 with free sides
+    has the exact field u = ((l - 1) x, (l - 1) y, -0.2 z), l the free lateral stretch, which the moving least squares
+    reproduce: at random points of the cube the displacement and F match it to 10 times the relaxation's tolerance (1e-7
+    of the largest displacement, 2 mm); at the nodes the displacement is result.vtu's; outside the body NaN."""
+    scene = mtled.Scene.load(SCENES / "uniaxial_cube_neohookean.json").set("/mesh/target_nodes", 300)
+    run = mtled.run(scene, output=tmp_path / "cube", threads=1)
+    stretches = numpy.array([lateral_stretch(1000, 4.02684e-5, 0.8)] * 2 + [0.8])
+    points = numpy.random.default_rng(3).uniform(0.0, 0.01, (200, 3))
+    field = run.field_at(points)
+    assert field.displacement.shape == (200, 3) and field.deformation_gradient.shape == (200, 3, 3)
+    numpy.testing.assert_allclose(field.displacement, points * (stretches - 1), rtol=0, atol=1e-6 * 0.002)
+    numpy.testing.assert_allclose(field.deformation_gradient, numpy.broadcast_to(numpy.diag(stretches), (200, 3, 3)),
+                                  rtol=0, atol=1e-6)
+    at_nodes = run.field_at(run.nodes)
+    numpy.testing.assert_allclose(at_nodes.displacement, vtu_displacement(run.folder / "result.vtu"), rtol=0,
+                                  atol=1e-12 * 0.002)
+    outside = run.field_at([[0.05, 0.05, 0.05]])
+    assert numpy.isnan(outside.displacement).all() and numpy.isnan(outside.deformation_gradient).all()
+    with pytest.raises(ValueError, match=r"\(n, 3\) array"):
+        run.field_at([0.001, 0.002, 0.003])
+
+
 def test_a_scene_loaded_by_a_relative_path_runs_after_the_script_changes_folder(tmp_path, monkeypatch):
     monkeypatch.chdir(SOURCE)
     scene = mtled.Scene.load("share/scenes/uniaxial_cube_neohookean.json").set("/mesh/target_nodes", 300)

@@ -13,7 +13,7 @@ def test_the_guides_examples_run_and_show_what_it_says(tmp_path, monkeypatch):
     (tmp_path / "share").symlink_to(SOURCE / "share")
     monkeypatch.chdir(tmp_path)
     blocks = re.findall(r"```python\n(.*?)```", (SOURCE / "docs" / "python.md").read_text(), re.S)
-    assert len(blocks) == 2
+    assert len(blocks) == 3
     printed = io.StringIO()
     namespace = {}
     with contextlib.redirect_stdout(printed):
@@ -34,6 +34,15 @@ def test_the_guides_examples_run_and_show_what_it_says(tmp_path, monkeypatch):
     assert match and int(match[2]) % 10 == 0, lines[3]
     assert lines[4] == f"stopped {match[2]}"
     assert 0.0 < float(match[1]) < 15.0
+
+    # The field beside the shaft: dragged down with the needle (u_z < 0) and sheared, both fading with the distance
+    # from the axis.
+    rows = [re.match(r"(\d+) mm from the axis: u_z = (-?[\d.]+) mm, E_xz = (-?[\d.]+)", line) for line in lines[5:9]]
+    assert all(rows), lines[5:9]
+    drags = [float(row[2]) for row in rows]
+    shears = [float(row[3]) for row in rows]
+    assert all(d < 0 for d in drags) and drags == sorted(drags), drags
+    assert all(e > 0 for e in shears) and shears == sorted(shears, reverse=True), shears
 
 
 def test_the_readmes_example_runs(tmp_path, monkeypatch):
