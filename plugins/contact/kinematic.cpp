@@ -123,12 +123,11 @@ class KinematicNeedle final : public NeedleModel {
   void update(const LoadState& load, const Discretisation& model, std::span<const double> u) override {
     const double advance = load.load_fraction * path_.depth;
     step_ = load.step;
-    if (punctured_) {
+    if (punctured()) {
       capture_passed(model, u, advance);
     } else if (tip_strain_.largest(model, u, path_.tip(advance)) > puncture_strain_) {
-      punctured_ = true;
       puncture_depth_ = depth_;
-      log().info("kinematic needle: puncture at depth {:.4g} mm", 1e3 * puncture_depth_);
+      log().info("kinematic needle: puncture at depth {:.4g} mm", 1e3 * *puncture_depth_);
       capture_passed(model, u, advance);
     }
     depth_ = advance;
@@ -141,7 +140,7 @@ class KinematicNeedle final : public NeedleModel {
   // since_capture, where reaching depends on their displacement).
   bool nodes_read(const LoadState& load, const Discretisation& model, std::vector<Index>& nodes) const override {
     const double advance = load.load_fraction * path_.depth;
-    if (!punctured_) tip_strain_.append_nodes_read(model, path_.tip(advance), nodes);
+    if (!punctured()) tip_strain_.append_nodes_read(model, path_.tip(advance), nodes);
     for (std::size_t k = next_candidate_; k < candidates_.size(); ++k) {
       const Index n = candidates_[k];
       if (captured_[n]) continue;
@@ -163,7 +162,7 @@ class KinematicNeedle final : public NeedleModel {
 
   std::optional<PlannedPath> planned_path() const override { return path_.planned(); }
   NeedleStatus status() const override {
-    NeedleStatus s = path_.status(depth_, punctured_ ? std::optional(puncture_depth_) : std::nullopt);
+    NeedleStatus s = path_.status(depth_, puncture_depth_);
     double force = 0.0;
     for (const DrivenSet* set : {&nodes_, &shaft_})
       for (const auto& r : set->constraints.reactions) force += r.dot(path_.direction);
@@ -313,8 +312,8 @@ class KinematicNeedle final : public NeedleModel {
     const double start_axial = start.dot(path_.direction);
     const Vec3 start_lateral = start - start_axial * path_.direction;
     const double since = std::max(0.0, advance - set.capture_depth[k]);
-    double axial = start_axial + (punctured_ ? coefficient_ : 1.0) * since;
-    if (punctured_ && from_reference_ && settle_steps_) {
+    double axial = start_axial + (punctured() ? coefficient_ : 1.0) * since;
+    if (punctured() && from_reference_ && settle_steps_) {
       // From the captured displacement to the prescription, linearly in steps.
       const Vec3 target = limited_drag(coefficient_ * (advance - set.reference_axial[k])) * path_.direction +
                           (return_to_path_ ? Vec3::Zero() : start_lateral);
@@ -322,9 +321,9 @@ class KinematicNeedle final : public NeedleModel {
           std::max(0.0, 1.0 - static_cast<double>(step_ - set.capture_step[k]) / static_cast<double>(*settle_steps_));
       return target + remaining * (start - target);
     }
-    if (punctured_ && from_reference_)
+    if (punctured() && from_reference_)
       axial = std::max(start_axial, limited_drag(coefficient_ * (advance - set.reference_axial[k])));
-    else if (punctured_)
+    else if (punctured())
       axial = start_axial + limited_drag(coefficient_ * since);
     double lateral_share = 1.0;
     if (return_to_path_) lateral_share = std::max(0.0, 1.0 - since / lateral_ramp_);
@@ -392,8 +391,10 @@ class KinematicNeedle final : public NeedleModel {
   std::vector<char> captured_;
   std::size_t next_candidate_ = 0, next_point_ = 0;
   DrivenSet nodes_, shaft_;  // footprint and captured nodes; captured shaft points
-  bool punctured_ = false, restarted_footprint_ = false;
-  double depth_ = 0.0, puncture_depth_ = 0.0;
+  bool restarted_footprint_ = false;
+  bool punctured() const { return puncture_depth_.has_value(); }
+  std::optional<double> puncture_depth_;  // where the needle punctured, once it has
+  double depth_ = 0.0;
   long step_ = 0;
 };
 

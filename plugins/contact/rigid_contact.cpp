@@ -196,11 +196,10 @@ class RigidContactNeedle final : public NeedleModel {
     apply_friction_law(step_advance);
     release_open_contacts();
 
-    if (!punctured_ && punctures(model, u)) {
-      punctured_ = true;
+    if (!punctured() && punctures(model, u)) {
       puncture_depth_ = depth_;
       for (auto& c : contacts_) c.pinned = false;
-      log().info("rigid_contact needle: puncture at depth {:.4g} mm (axial force {:.4g} N)", 1e3 * puncture_depth_,
+      log().info("rigid_contact needle: puncture at depth {:.4g} mm (axial force {:.4g} N)", 1e3 * *puncture_depth_,
                  axial_force());
     }
     depth_ = advance;
@@ -234,7 +233,7 @@ class RigidContactNeedle final : public NeedleModel {
   // What update() reads: the supports of the candidates not in contact (catch_nodes_inside) and, before a puncture
   // by strain, of the points around the tip.
   bool nodes_read(const LoadState&, const Discretisation& model, std::vector<Index>& nodes) const override {
-    if (!punctured_ && !puncture_force_) tip_strain_.append_nodes_read(model, path_.tip(depth_), nodes);
+    if (!punctured() && !puncture_force_) tip_strain_.append_nodes_read(model, path_.tip(depth_), nodes);
     for (const Index n : candidates_)
       if (!in_contact_[n]) model.basis()->interpolation.append_row(n, nodes);
     return true;
@@ -244,7 +243,7 @@ class RigidContactNeedle final : public NeedleModel {
 
   std::optional<PlannedPath> planned_path() const override { return path_.planned(); }
   NeedleStatus status() const override {
-    NeedleStatus s = path_.status(depth_, punctured_ ? std::optional(puncture_depth_) : std::nullopt);
+    NeedleStatus s = path_.status(depth_, puncture_depth_);
     s.force = axial_force();
     s.driven_nodes = static_cast<Index>(contacts_.size());
     return s;
@@ -429,7 +428,7 @@ class RigidContactNeedle final : public NeedleModel {
       if (xi <= 0.0) continue;
       const double rho = path_.radial(x);
       const bool inside = rho < surface_radius(xi);
-      const bool in_layer = punctured_ && !released_before_[n] && rho <= capture_radius_;
+      const bool in_layer = punctured() && !released_before_[n] && rho <= capture_radius_;
       if (inside || in_layer) catch_node(model, n, x, xi, false);
     }
   }
@@ -495,8 +494,9 @@ class RigidContactNeedle final : public NeedleModel {
   std::vector<char> in_contact_, released_before_;
   std::vector<Contact> contacts_;
   NodalConstraints contact_;
-  bool punctured_ = false;
-  double depth_ = 0.0, puncture_depth_ = 0.0, smoothed_force_ = 0.0;
+  bool punctured() const { return puncture_depth_.has_value(); }
+  std::optional<double> puncture_depth_;  // where the needle punctured, once it has
+  double depth_ = 0.0, smoothed_force_ = 0.0;
   long axis_nodes_ = 0, caught_ = 0, released_ = 0, slipping_count_ = 0;
 };
 
