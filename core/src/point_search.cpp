@@ -4,20 +4,21 @@
 
 namespace mtled {
 
-namespace {
-struct Cloud {
-  std::span<const Vec3> points;
-  std::size_t kdtree_get_point_count() const { return points.size(); }
-  double kdtree_get_pt(std::size_t i, std::size_t d) const { return points[i][static_cast<Eigen::Index>(d)]; }
-  template <class Box>
-  bool kdtree_get_bbox(Box&) const {
-    return false;
-  }
-};
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud>, Cloud, 3, std::uint32_t>;
-}  // namespace
-
+// The nanoflann adaptor and tree as members of the pimpl, not in an anonymous namespace: a type with internal
+// linkage as a member's type is what GCC warns of (-Wsubobject-linkage) when the file is compiled in a unity batch.
 struct PointSearch::Tree {
+  struct Cloud {
+    std::span<const Vec3> points;
+    std::size_t kdtree_get_point_count() const { return points.size(); }
+    double kdtree_get_pt(std::size_t i, std::size_t d) const { return points[i][static_cast<Eigen::Index>(d)]; }
+    template <class Box>
+    bool kdtree_get_bbox(Box&) const {
+      return false;
+    }
+  };
+  using KdTree =
+      nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Cloud>, Cloud, 3, std::uint32_t>;
+
   Cloud cloud;
   KdTree index;
   explicit Tree(std::span<const Vec3> points)

@@ -20,14 +20,14 @@ namespace {
 using Kind = VoxelKind;
 
 // Field offsets of the two header versions.
-struct Layout {
+struct HeaderLayout {
   int version;
   std::size_t header_size, datatype, dim, pixdim, vox_offset, scl_slope, qform_code, sform_code, quatern, qoffset, srow,
       xyzt_units;
   bool wide;  // NIfTI-2: 64-bit dims, double reals, 32-bit codes
 };
-constexpr Layout kNifti1{1, 348, 70, 40, 76, 108, 112, 252, 254, 256, 268, 280, 123, false};
-constexpr Layout kNifti2{2, 540, 12, 16, 104, 168, 176, 344, 348, 352, 376, 400, 500, true};
+constexpr HeaderLayout kNifti1{1, 348, 70, 40, 76, 108, 112, 252, 254, 256, 268, 280, 123, false};
+constexpr HeaderLayout kNifti2{2, 540, 12, 16, 104, 168, 176, 344, 348, 352, 376, 400, 500, true};
 
 class HeaderReader {
  public:
@@ -41,13 +41,13 @@ class HeaderReader {
     std::memcpy(&value, raw, sizeof(T));
     return value;
   }
-  double real(const Layout& l, std::size_t offset) const {
+  double real(const HeaderLayout& l, std::size_t offset) const {
     return l.wide ? get<double>(offset) : static_cast<double>(get<float>(offset));
   }
-  std::int64_t integer(const Layout& l, std::size_t offset) const {  // dims and vox_offset
+  std::int64_t integer(const HeaderLayout& l, std::size_t offset) const {  // dims and vox_offset
     return l.wide ? get<std::int64_t>(offset) : static_cast<std::int64_t>(get<std::int16_t>(offset));
   }
-  int code(const Layout& l, std::size_t offset) const {
+  int code(const HeaderLayout& l, std::size_t offset) const {
     return l.wide ? get<std::int32_t>(offset) : static_cast<int>(get<std::int16_t>(offset));
   }
 
@@ -84,7 +84,7 @@ double length_unit(int xyzt_units) {
 }
 
 // The standard's "method 2": the rotation of the quaternion (b, c, d), the voxel sizes, qfac and the offset.
-void place_by_qform(VoxelGrid& grid, const HeaderReader& h, const Layout& l, const Vec3& spacing, double unit) {
+void place_by_qform(VoxelGrid& grid, const HeaderReader& h, const HeaderLayout& l, const Vec3& spacing, double unit) {
   const double b = h.real(l, l.quatern), c = h.real(l, l.quatern + (l.wide ? 8 : 4)), d = h.real(l, l.quatern + (l.wide ? 16 : 8));
   const double a = std::sqrt(std::max(0.0, 1.0 - (b * b + c * c + d * d)));
   Mat3 rotation;
@@ -97,7 +97,7 @@ void place_by_qform(VoxelGrid& grid, const HeaderReader& h, const Layout& l, con
   grid.origin = unit * Vec3(h.real(l, l.qoffset), h.real(l, l.qoffset + step), h.real(l, l.qoffset + 2 * step));
 }
 
-void place_by_sform(VoxelGrid& grid, const HeaderReader& h, const Layout& l, double unit) {
+void place_by_sform(VoxelGrid& grid, const HeaderReader& h, const HeaderLayout& l, double unit) {
   const std::size_t step = l.wide ? 8 : 4;
   for (int r = 0; r < 3; ++r) {
     const std::size_t row = l.srow + static_cast<std::size_t>(r) * 4 * step;
@@ -115,7 +115,7 @@ Image parse_nifti(const std::string& bytes, const std::string& source) {
   const std::int32_t header_size = HeaderReader(bytes, swap).get<std::int32_t>(0);
   if (header_size != 348 && header_size != 540)
     throw InputError(source, "not a NIfTI file: sizeof_hdr is neither 348 (NIfTI-1) nor 540 (NIfTI-2)");
-  const Layout& l = header_size == 348 ? kNifti1 : kNifti2;
+  const HeaderLayout& l = header_size == 348 ? kNifti1 : kNifti2;
   if (bytes.size() < l.header_size)
     throw InputError(source, fmt::format("the NIfTI-{} header is truncated: {} of {} bytes", l.version, bytes.size(),
                                          l.header_size));

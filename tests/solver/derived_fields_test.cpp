@@ -13,13 +13,12 @@
 namespace mtled {
 namespace {
 
-constexpr double kMu = 722.0, kD = 4.02684e-5;
-
 TEST(DerivedFields, HomogeneousStretchGivesTheLawsClosedFormInEveryTet) {
+  const double mu = 722.0, D = 4.02684e-5;
   auto model = std::make_unique<test::Discretised>(test::box_mesh(Vec3(0.01, 0.01, 0.01), 4, 4, 4, 0.25, 3),
                                                    test::make<ShapeFunctions>("mls", json::object()),
                                                    std::vector<std::shared_ptr<const Material>>{test::make<Material>(
-                                                       "neo_hookean", {{"mu", kMu}, {"D", kD}, {"density", 1000.0}})},
+                                                       "neo_hookean", {{"mu", mu}, {"D", D}, {"density", 1000.0}})},
                                                    Discretisation::Options{});
   // Uniaxial stretch a along x with lateral contraction b: u = (F - I) X at the nodes.
   const double a = 1.2, b = 0.93;
@@ -30,8 +29,8 @@ TEST(DerivedFields, HomogeneousStretchGivesTheLawsClosedFormInEveryTet) {
       u[3 * static_cast<std::size_t>(i) + c] = (stretch[c] - 1.0) * model->discretisation.nodes()[i][c];
 
   const double J = a * b * b;
-  const double pressure = 2.0 * (J - 1.0) / kD;
-  const double deviatoric = kMu / J * std::pow(J, -2.0 / 3.0) * (a * a - b * b);  // sigma_xx - sigma_yy
+  const double pressure = 2.0 * (J - 1.0) / D;
+  const double deviatoric = mu / J * std::pow(J, -2.0 / 3.0) * (a * a - b * b);  // sigma_xx - sigma_yy
   const Vec3 sigma(pressure + 2.0 / 3.0 * deviatoric, pressure - deviatoric / 3.0, pressure - deviatoric / 3.0);
 
   std::vector<std::string> names;

@@ -7,7 +7,7 @@
 namespace mtled::test {
 namespace {
 
-std::filesystem::path write_file(const std::string& test, const std::string& name, const std::string& text) {
+std::filesystem::path write_inp(const std::string& test, const std::string& name, const std::string& text) {
   const auto dir = scratch_dir("abaqus_file/" + test);
   write_text(dir / name, text);
   return dir;
@@ -43,7 +43,7 @@ TEST(AbaqusFile, GmshInpExportWithRegionsNamed) {
 }
 
 TEST(AbaqusFile, SinglePartInstanceAsAbaqusCaeWritesIt) {
-  const auto dir = write_file("part", "part.inp", R"(*Heading
+  const auto dir = write_inp("part", "part.inp", R"(*Heading
 ** Job name: cube Model name: Model-1
 *Preprint, echo=NO, model=NO, history=NO, contact=NO
 *Part, name=Cube
@@ -100,7 +100,7 @@ TEST(AbaqusFile, SinglePartInstanceAsAbaqusCaeWritesIt) {
 }
 
 TEST(AbaqusFile, IncludeSetsFromElementsAndUnassignedTets) {
-  const auto dir = write_file("include", "main.inp", R"(*INCLUDE, INPUT=nodes.inp
+  const auto dir = write_inp("include", "main.inp", R"(*INCLUDE, INPUT=nodes.inp
 *ELEMENT, TYPE=C3D4, ELSET=liver
 1, 10, 20, 30, 40
 *ELEMENT, TYPE=C3D4H
@@ -127,10 +127,10 @@ TEST(AbaqusFile, IncludeSetsFromElementsAndUnassignedTets) {
 TEST(AbaqusFile, SetNamedInItselfAndExtremeGenerateRanges) {
   std::string again;
   for (int i = 0; i < 40; ++i) again += "a, ";
-  const auto dir = write_file("self_set", "m.inp",
-                              "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n"
-                              "*NSET, NSET=a\n1\n" +
-                                  again + "a\n*NSET, NSET=b, GENERATE\n2, 9223372036854775807, 9223372036854775807\n");
+  const auto dir = write_inp("self_set", "m.inp",
+                             "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n"
+                             "*NSET, NSET=a\n1\n" +
+                                 again + "a\n*NSET, NSET=b, GENERATE\n2, 9223372036854775807, 9223372036854775807\n");
   const TetMesh mesh = read_mesh("abaqus_file", {{"path", "m.inp"}}, dir);
   EXPECT_EQ(mesh.node_sets.at("a"), (std::vector<Index>{0}));
   EXPECT_EQ(mesh.node_sets.at("b"), (std::vector<Index>{1}));
@@ -138,7 +138,7 @@ TEST(AbaqusFile, SetNamedInItselfAndExtremeGenerateRanges) {
 
 TEST(AbaqusFile, WithoutElementSetsTheRegionIsAll) {
   const auto dir =
-      write_file("no_sets", "m.inp", "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n");
+      write_inp("no_sets", "m.inp", "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n");
   const TetMesh mesh = read_mesh("abaqus_file", {{"path", "m.inp"}}, dir);
   EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"all"}));
   EXPECT_EQ(mesh.tet_region, (std::vector<Index>{0}));
@@ -167,27 +167,27 @@ class AbaqusFileErrors : public ::testing::TestWithParam<BadInp> {};
 
 TEST_P(AbaqusFileErrors, NameTheLineAndSayWhatToDo) {
   const BadInp& bad = GetParam();
-  const auto dir = write_file("error_" + bad.name, "bad.inp", bad.text);
+  const auto dir = write_inp("error_" + bad.name, "bad.inp", bad.text);
   const InputError error = read_error("abaqus_file", {{"path", "bad.inp"}}, dir);
   EXPECT_EQ(where_of(error), fmt::format("{}:{}", (dir / "bad.inp").string(), bad.line)) << message_of(error);
   EXPECT_NE(message_of(error).find(bad.message), std::string::npos) << message_of(error);
 }
 
-const std::string kNodes = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n5, 1, 1, 1\n";  // lines 1-6
+const std::string kInpNodes = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n5, 1, 1, 1\n";  // lines 1-6
 
 INSTANTIATE_TEST_SUITE_P(
     Cases, AbaqusFileErrors,
     ::testing::Values(
-        BadInp{"quadratic_tet", kNodes + "*ELEMENT, TYPE=C3D10, ELSET=a\n1, 1, 2, 3, 4, 5, 1, 2, 3, 4, 5\n", 7,
+        BadInp{"quadratic_tet", kInpNodes + "*ELEMENT, TYPE=C3D10, ELSET=a\n1, 1, 2, 3, 4, 5, 1, 2, 3, 4, 5\n", 7,
                "mesh with linear tets"},
-        BadInp{"hexahedron", kNodes + "** comment\n*Element, type=C3D8R\n", 8, "4-node tets (C3D4)"},
-        BadInp{"unknown_type", kNodes + "*ELEMENT, TYPE=XYZ4\n", 7, "element type XYZ4 is not supported"},
-        BadInp{"no_type", kNodes + "*ELEMENT, ELSET=a\n", 7, "*ELEMENT needs TYPE="},
+        BadInp{"hexahedron", kInpNodes + "** comment\n*Element, type=C3D8R\n", 8, "4-node tets (C3D4)"},
+        BadInp{"unknown_type", kInpNodes + "*ELEMENT, TYPE=XYZ4\n", 7, "element type XYZ4 is not supported"},
+        BadInp{"no_type", kInpNodes + "*ELEMENT, ELSET=a\n", 7, "*ELEMENT needs TYPE="},
         BadInp{"duplicate_node", "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n1, 0, 1, 0\n", 4,
                "node 1 is defined twice (first on line 2)"},
-        BadInp{"unknown_node", kNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 9\n", 8,
+        BadInp{"unknown_node", kInpNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 9\n", 8,
                "refers to node 9, which no *NODE defines"},
-        BadInp{"duplicate_element", kNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n1, 2, 3, 4, 5\n", 9,
+        BadInp{"duplicate_element", kInpNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n1, 2, 3, 4, 5\n", 9,
                "element 1 is defined twice"},
         BadInp{"not_a_number", "*NODE\n1, 0, 0, 0\n2, 1, 0,, 0\n", 3,
                "expected the z coordinate (a finite number), found \"\""},
@@ -195,7 +195,7 @@ INSTANTIATE_TEST_SUITE_P(
         // Cut between two lines of *NODE: no elements follow.
         BadInp{"truncated_nodes", "*HEADING\ncut\n*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n", 5,
                "the file ends in the *NODE block that starts on line 3: is it truncated?"},
-        BadInp{"tet_fields", kNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3\n", 8,
+        BadInp{"tet_fields", kInpNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3\n", 8,
                "needs \"id, n1, n2, n3, n4\", found 4 fields"},
         BadInp{"two_instances",
                "*PART, NAME=P\n*END PART\n*ASSEMBLY, NAME=A\n*INSTANCE, NAME=P-1, PART=P\n*END INSTANCE\n"
@@ -206,22 +206,23 @@ INSTANTIATE_TEST_SUITE_P(
                "*PART, NAME=P\n*END PART\n*ASSEMBLY, NAME=A\n*INSTANCE, NAME=P-1, PART=P\n0, 0, 0\n"
                "0, 0, 0, 0, 0, 1, 90\n",
                6, "rotation is not supported"},
-        BadInp{"unknown_set", kNodes + "*NSET, NSET=a\n1, base\n", 8, "\"base\" is neither an id nor a node set"},
-        BadInp{"bad_generate", kNodes + "*NSET, NSET=a, GENERATE\n5, 1, 1\n", 8, "is not a range"},
-        BadInp{"set_unknown_element", kNodes + "*ELEMENT, TYPE=C3D4, ELSET=a\n1, 1, 2, 3, 4\n*ELSET, ELSET=a\n7\n", 10,
-               "lists element 7, which no *ELEMENT defines"},
+        BadInp{"unknown_set", kInpNodes + "*NSET, NSET=a\n1, base\n", 8, "\"base\" is neither an id nor a node set"},
+        BadInp{"bad_generate", kInpNodes + "*NSET, NSET=a, GENERATE\n5, 1, 1\n", 8, "is not a range"},
+        BadInp{"set_unknown_element", kInpNodes + "*ELEMENT, TYPE=C3D4, ELSET=a\n1, 1, 2, 3, 4\n*ELSET, ELSET=a\n7\n",
+               10, "lists element 7, which no *ELEMENT defines"},
         BadInp{"overlapping_regions",
-               kNodes + "*ELEMENT, TYPE=C3D4, ELSET=a\n1, 1, 2, 3, 4\n*ELEMENT, TYPE=C3D4, ELSET=b\n2, 2, 3, 4, 5\n"
-                        "*ELSET, ELSET=b\n1\n",
+               kInpNodes + "*ELEMENT, TYPE=C3D4, ELSET=a\n1, 1, 2, 3, 4\n*ELEMENT, TYPE=C3D4, ELSET=b\n2, 2, 3, 4, 5\n"
+                           "*ELSET, ELSET=b\n1\n",
                12, "element 1 is in element sets \"a\" and \"b\""},
-        BadInp{"section_without_set", kNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*SOLID SECTION, ELSET=tissue\n", 9,
-               "names element set \"tissue\", which the file does not define"},
+        BadInp{"section_without_set", kInpNodes + "*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n*SOLID SECTION, ELSET=tissue\n",
+               9, "names element set \"tissue\", which the file does not define"},
         BadInp{"system", "*SYSTEM\n0, 0, 0\n", 1, "*SYSTEM"},
         BadInp{"missing_include", "*INCLUDE, INPUT=absent.inp\n", 1, "does not exist"},
         // last - first overflowed for a range over the whole integer range, which passed the size check and
         // allocated until std::bad_alloc.
         BadInp{"generate_whole_integer_range",
-               kNodes + "*NSET, NSET=a, GENERATE\n-9223372036854775808, 9223372036854775807, 1\n", 8, "is not a range"},
+               kInpNodes + "*NSET, NSET=a, GENERATE\n-9223372036854775808, 9223372036854775807, 1\n", 8,
+               "is not a range"},
         // Found by tests/fuzz: the keyword line's continuation went on past the end of the file, closing it, so
         // the file included itself forever instead of ever getting 16 deep.
         BadInp{"include_itself_continued", "*INCLUDE, INPUT=bad.inp,\n", 1, "*INCLUDE nested more than 16 deep"}),

@@ -15,7 +15,7 @@ std::string msh22(const std::string& elements, const std::string& names = "") {
          "$EndElements\n";
 }
 
-std::filesystem::path write_file(const std::string& test, const std::string& name, const std::string& text) {
+std::filesystem::path write_msh(const std::string& test, const std::string& name, const std::string& text) {
   const auto dir = scratch_dir("gmsh_file/" + test);
   write_text(dir / name, text);
   return dir;
@@ -60,23 +60,23 @@ TEST(GmshFile, GmshWrittenMsh22AndMsh41Agree) {
 }
 
 TEST(GmshFile, TetsOutsidePhysicalVolumesFormRegionUnassigned) {
-  const auto dir = write_file("unassigned", "m.msh",
-                              msh22("2\n1 4 2 7 1 10 20 30 40\n2 4 2 0 2 20 30 40 50\n",
-                                    "$PhysicalNames\n1\n3 7 \"liver tissue\"\n$EndPhysicalNames\n"));
+  const auto dir = write_msh("unassigned", "m.msh",
+                             msh22("2\n1 4 2 7 1 10 20 30 40\n2 4 2 0 2 20 30 40 50\n",
+                                   "$PhysicalNames\n1\n3 7 \"liver tissue\"\n$EndPhysicalNames\n"));
   const TetMesh mesh = read_mesh("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"liver tissue", "unassigned"}));
   EXPECT_EQ(mesh.tet_region, (std::vector<Index>{0, 1}));
 }
 
 TEST(GmshFile, WithoutPhysicalGroupsTheRegionIsAllAndUnnamedGroupsAreNumbers) {
-  auto dir = write_file("none", "m.msh", msh22("2\n1 4 0 10 20 30 40\n2 4 0 20 30 40 50\n"));
+  auto dir = write_msh("none", "m.msh", msh22("2\n1 4 0 10 20 30 40\n2 4 0 20 30 40 50\n"));
   TetMesh mesh = read_mesh("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"all"}));
   EXPECT_EQ(mesh.tet_region, (std::vector<Index>{0, 0}));
   EXPECT_TRUE(mesh.node_sets.empty());
 
   // Physical groups 5 (volume) and 9 (a point, element type 15) without $PhysicalNames.
-  dir = write_file("numbers", "m.msh", msh22("3\n1 15 2 9 1 50\n2 4 2 5 1 10 20 30 40\n3 4 2 5 1 20 30 40 50\n"));
+  dir = write_msh("numbers", "m.msh", msh22("3\n1 15 2 9 1 50\n2 4 2 5 1 10 20 30 40\n3 4 2 5 1 20 30 40 50\n"));
   mesh = read_mesh("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"5"}));
   ASSERT_EQ(mesh.node_sets.count("9"), 1u);
@@ -113,13 +113,13 @@ class GmshFileErrors : public ::testing::TestWithParam<BadMsh> {};
 
 TEST_P(GmshFileErrors, NameTheLineAndSayWhatToDo) {
   const BadMsh& bad = GetParam();
-  const auto dir = write_file("error_" + bad.name, "bad.msh", bad.text);
+  const auto dir = write_msh("error_" + bad.name, "bad.msh", bad.text);
   const InputError error = read_error("gmsh_file", {{"path", "bad.msh"}}, dir);
   EXPECT_EQ(where_of(error), fmt::format("{}:{}", (dir / "bad.msh").string(), bad.line)) << message_of(error);
   EXPECT_NE(message_of(error).find(bad.message), std::string::npos) << message_of(error);
 }
 
-const std::string kNodes = "$Nodes\n5\n10 0 0 0\n20 1 0 0\n30 0 1 0\n40 0 0 1\n50 1 1 1\n$EndNodes\n";
+const std::string kMshNodes = "$Nodes\n5\n10 0 0 0\n20 1 0 0\n30 0 1 0\n40 0 0 1\n50 1 1 1\n$EndNodes\n";
 const std::string kHeader = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
 
 INSTANTIATE_TEST_SUITE_P(
@@ -132,26 +132,28 @@ INSTANTIATE_TEST_SUITE_P(
         // Cut in the middle of $Nodes: the file ends on line 7 after 2 of 5 nodes.
         BadMsh{"truncated_nodes", kHeader + "$Nodes\n5\n10 0 0 0\n20 1 0 0\n", 7,
                "ends inside the $Nodes section that starts on line 4 after 2 of 5 nodes"},
-        BadMsh{"truncated_elements", kHeader + kNodes + "$Elements\n2\n1 4 0 10 20 30 40\n", 14,
+        BadMsh{"truncated_elements", kHeader + kMshNodes + "$Elements\n2\n1 4 0 10 20 30 40\n", 14,
                "the file ends inside the $Elements section"},
-        BadMsh{"missing_end", kHeader + kNodes + "$Elements\n1\n1 4 0 10 20 30 40\n", 14, "ends before $EndElements"},
+        BadMsh{"missing_end", kHeader + kMshNodes + "$Elements\n1\n1 4 0 10 20 30 40\n", 14,
+               "ends before $EndElements"},
         BadMsh{"count_too_small",
-               kHeader + kNodes + "$Elements\n1\n1 4 0 10 20 30 40\n2 4 0 20 30 40 50\n$EndElements\n", 15,
+               kHeader + kMshNodes + "$Elements\n1\n1 4 0 10 20 30 40\n2 4 0 20 30 40 50\n$EndElements\n", 15,
                "expected $EndElements"},
-        BadMsh{"unknown_node", kHeader + kNodes + "$Elements\n1\n1 4 0 10 20 30 99\n$EndElements\n", 14,
+        BadMsh{"unknown_node", kHeader + kMshNodes + "$Elements\n1\n1 4 0 10 20 30 99\n$EndElements\n", 14,
                "refers to node 99, which $Nodes does not define"},
         BadMsh{"duplicate_node", kHeader + "$Nodes\n2\n10 0 0 0\n10 1 0 0\n$EndNodes\n", 7,
                "node 10 is defined twice (first on line 6)"},
         BadMsh{"not_a_number", kHeader + "$Nodes\n1\n10 0 zero 0\n$EndNodes\n", 6,
                "expected the y coordinate (a finite number), found \"zero\""},
-        BadMsh{"second_order", kHeader + kNodes + "$Elements\n1\n1 11 0 10 20 30 40 10 20 30 40 50 50\n$EndElements\n",
-               14, "gmsh -3 -order 1"},
-        BadMsh{"hexahedron", kHeader + kNodes + "$Elements\n1\n1 5 0 10 20 30 40 50 10 20 30\n$EndElements\n", 14,
+        BadMsh{"second_order",
+               kHeader + kMshNodes + "$Elements\n1\n1 11 0 10 20 30 40 10 20 30 40 50 50\n$EndElements\n", 14,
+               "gmsh -3 -order 1"},
+        BadMsh{"hexahedron", kHeader + kMshNodes + "$Elements\n1\n1 5 0 10 20 30 40 50 10 20 30\n$EndElements\n", 14,
                "tet-only mesh"},
-        BadMsh{"wrong_node_count", kHeader + kNodes + "$Elements\n1\n1 4 0 10 20 30\n$EndElements\n", 14,
+        BadMsh{"wrong_node_count", kHeader + kMshNodes + "$Elements\n1\n1 4 0 10 20 30\n$EndElements\n", 14,
                "should have 7 fields, found 6"},
         BadMsh{"duplicate_tet",
-               kHeader + kNodes + "$Elements\n2\n1 4 2 1 1 10 20 30 40\n2 4 2 2 1 40 30 20 10\n$EndElements\n", 15,
+               kHeader + kMshNodes + "$Elements\n2\n1 4 2 1 1 10 20 30 40\n2 4 2 2 1 40 30 20 10\n$EndElements\n", 15,
                "repeats the tet of line 14"},
         BadMsh{"two_volume_groups",
                "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Entities\n0 0 0 1\n1 0 0 0 1 1 1 2 1 2 0\n$EndEntities\n"
@@ -163,8 +165,9 @@ INSTANTIATE_TEST_SUITE_P(
                "the file ends inside the $Nodes section that starts on line 4 after 2 of 4 nodes"},
         // Counts near the largest integer overflowed the reader's arithmetic (undefined behaviour, which UBSan
         // reports): they must be refused like any other wrong count.
-        BadMsh{"huge_tag_count", kHeader + kNodes + "$Elements\n1\n1 4 9223372036854775807 10 20 30 40\n$EndElements\n",
-               14, "with 9223372036854775807 tags"},
+        BadMsh{"huge_tag_count",
+               kHeader + kMshNodes + "$Elements\n1\n1 4 9223372036854775807 10 20 30 40\n$EndElements\n", 14,
+               "with 9223372036854775807 tags"},
         BadMsh{"huge_node_block",
                "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n2 2 1 2\n0 1 0 1\n1\n0 0 0\n0 2 0 9223372036854775807\n"
                "$EndNodes\n",
@@ -176,12 +179,12 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& test_case) { return test_case.param.name; });
 
 TEST(GmshFileErrorsWithoutLine, NoTetsEmptyAndMissingFiles) {
-  auto dir = write_file("no_tets", "m.msh", kHeader + kNodes + "$Elements\n1\n1 2 0 10 20 30\n$EndElements\n");
+  auto dir = write_msh("no_tets", "m.msh", kHeader + kMshNodes + "$Elements\n1\n1 2 0 10 20 30\n$EndElements\n");
   InputError error = read_error("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(where_of(error), (dir / "m.msh").string());
   EXPECT_NE(message_of(error).find("no 4-node tetrahedra"), std::string::npos) << message_of(error);
 
-  dir = write_file("empty", "m.msh", "\n  \n");
+  dir = write_msh("empty", "m.msh", "\n  \n");
   error = read_error("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(where_of(error), (dir / "m.msh").string());
   EXPECT_NE(message_of(error).find("empty"), std::string::npos) << message_of(error);
