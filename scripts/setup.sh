@@ -23,6 +23,6 @@ fi
 tests=OFF; [ "${1:-}" = "--tests" ] && tests=ON
 step "configuring (CMake)"
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMTLED_BUILD_TESTS=$tests -DMTLED_BUILD_BENCHMARKS=$tests >/dev/null
-step "building with 2 jobs$( [ $tests = ON ] && echo ', tests included' ) (about 10-15 minutes from scratch on 2 cores)"
+step "building with 2 jobs$( [ $tests = ON ] && echo ', tests included, about 10' || echo ', about 6') minutes from scratch on 2 cores"
 cmake --build build -j2
 step "built"
