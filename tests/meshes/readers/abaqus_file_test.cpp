@@ -7,12 +7,6 @@
 namespace mtled::test {
 namespace {
 
-std::filesystem::path write_inp(const std::string& test, const std::string& name, const std::string& text) {
-  const auto dir = scratch_dir("abaqus_file/" + test);
-  write_text(dir / name, text);
-  return dir;
-}
-
 TEST(AbaqusFile, CubeGivesTheReferenceCube) {
   // cube.inp: two *NODE blocks, ids not 1..n, S3 surface elements (skipped), keywords in mixed case, an
   // *ELEMENT keyword line continued on the next line, an element whose nodes continue on the next line, a
@@ -43,7 +37,7 @@ TEST(AbaqusFile, GmshInpExportWithRegionsNamed) {
 }
 
 TEST(AbaqusFile, SinglePartInstanceAsAbaqusCaeWritesIt) {
-  const auto dir = write_inp("part", "part.inp", R"(*Heading
+  const auto dir = folder_with_file("abaqus_file/part", "part.inp", R"(*Heading
 ** Job name: cube Model name: Model-1
 *Preprint, echo=NO, model=NO, history=NO, contact=NO
 *Part, name=Cube
@@ -100,7 +94,7 @@ TEST(AbaqusFile, SinglePartInstanceAsAbaqusCaeWritesIt) {
 }
 
 TEST(AbaqusFile, IncludeSetsFromElementsAndUnassignedTets) {
-  const auto dir = write_inp("include", "main.inp", R"(*INCLUDE, INPUT=nodes.inp
+  const auto dir = folder_with_file("abaqus_file/include", "main.inp", R"(*INCLUDE, INPUT=nodes.inp
 *ELEMENT, TYPE=C3D4, ELSET=liver
 1, 10, 20, 30, 40
 *ELEMENT, TYPE=C3D4H
@@ -127,18 +121,19 @@ TEST(AbaqusFile, IncludeSetsFromElementsAndUnassignedTets) {
 TEST(AbaqusFile, SetNamedInItselfAndExtremeGenerateRanges) {
   std::string again;
   for (int i = 0; i < 40; ++i) again += "a, ";
-  const auto dir = write_inp("self_set", "m.inp",
-                             "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n"
-                             "*NSET, NSET=a\n1\n" +
-                                 again + "a\n*NSET, NSET=b, GENERATE\n2, 9223372036854775807, 9223372036854775807\n");
+  const auto dir =
+      folder_with_file("abaqus_file/self_set", "m.inp",
+                       "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n"
+                       "*NSET, NSET=a\n1\n" +
+                           again + "a\n*NSET, NSET=b, GENERATE\n2, 9223372036854775807, 9223372036854775807\n");
   const TetMesh mesh = read_mesh("abaqus_file", {{"path", "m.inp"}}, dir);
   EXPECT_EQ(mesh.node_sets.at("a"), (std::vector<Index>{0}));
   EXPECT_EQ(mesh.node_sets.at("b"), (std::vector<Index>{1}));
 }
 
 TEST(AbaqusFile, WithoutElementSetsTheRegionIsAll) {
-  const auto dir =
-      write_inp("no_sets", "m.inp", "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n");
+  const auto dir = folder_with_file("abaqus_file/no_sets", "m.inp",
+                                    "*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n4,0,0,1\n*ELEMENT,TYPE=C3D4\n1,1,2,3,4\n");
   const TetMesh mesh = read_mesh("abaqus_file", {{"path", "m.inp"}}, dir);
   EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"all"}));
   EXPECT_EQ(mesh.tet_region, (std::vector<Index>{0}));
@@ -167,7 +162,7 @@ class AbaqusFileErrors : public ::testing::TestWithParam<BadInp> {};
 
 TEST_P(AbaqusFileErrors, NameTheLineAndSayWhatToDo) {
   const BadInp& bad = GetParam();
-  const auto dir = write_inp("error_" + bad.name, "bad.inp", bad.text);
+  const auto dir = folder_with_file("abaqus_file/error_" + bad.name, "bad.inp", bad.text);
   const InputError error = read_error("abaqus_file", {{"path", "bad.inp"}}, dir);
   EXPECT_EQ(where_of(error), fmt::format("{}:{}", (dir / "bad.inp").string(), bad.line)) << message_of(error);
   EXPECT_NE(message_of(error).find(bad.message), std::string::npos) << message_of(error);

@@ -15,12 +15,6 @@ std::string msh22(const std::string& elements, const std::string& names = "") {
          "$EndElements\n";
 }
 
-std::filesystem::path write_msh(const std::string& test, const std::string& name, const std::string& text) {
-  const auto dir = scratch_dir("gmsh_file/" + test);
-  write_text(dir / name, text);
-  return dir;
-}
-
 TEST(GmshFile, HandWrittenMsh22AndMsh41GiveTheReferenceCube) {
   const TetMesh v2 = read_mesh("gmsh_file", {{"path", "cube_msh22.msh"}});
   const TetMesh v4 = read_mesh("gmsh_file", {{"path", "cube_msh41.msh"}});
@@ -60,23 +54,24 @@ TEST(GmshFile, GmshWrittenMsh22AndMsh41Agree) {
 }
 
 TEST(GmshFile, TetsOutsidePhysicalVolumesFormRegionUnassigned) {
-  const auto dir = write_msh("unassigned", "m.msh",
-                             msh22("2\n1 4 2 7 1 10 20 30 40\n2 4 2 0 2 20 30 40 50\n",
-                                   "$PhysicalNames\n1\n3 7 \"liver tissue\"\n$EndPhysicalNames\n"));
+  const auto dir = folder_with_file("gmsh_file/unassigned", "m.msh",
+                                    msh22("2\n1 4 2 7 1 10 20 30 40\n2 4 2 0 2 20 30 40 50\n",
+                                          "$PhysicalNames\n1\n3 7 \"liver tissue\"\n$EndPhysicalNames\n"));
   const TetMesh mesh = read_mesh("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"liver tissue", "unassigned"}));
   EXPECT_EQ(mesh.tet_region, (std::vector<Index>{0, 1}));
 }
 
 TEST(GmshFile, WithoutPhysicalGroupsTheRegionIsAllAndUnnamedGroupsAreNumbers) {
-  auto dir = write_msh("none", "m.msh", msh22("2\n1 4 0 10 20 30 40\n2 4 0 20 30 40 50\n"));
+  auto dir = folder_with_file("gmsh_file/none", "m.msh", msh22("2\n1 4 0 10 20 30 40\n2 4 0 20 30 40 50\n"));
   TetMesh mesh = read_mesh("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"all"}));
   EXPECT_EQ(mesh.tet_region, (std::vector<Index>{0, 0}));
   EXPECT_TRUE(mesh.node_sets.empty());
 
   // Physical groups 5 (volume) and 9 (a point, element type 15) without $PhysicalNames.
-  dir = write_msh("numbers", "m.msh", msh22("3\n1 15 2 9 1 50\n2 4 2 5 1 10 20 30 40\n3 4 2 5 1 20 30 40 50\n"));
+  dir = folder_with_file("gmsh_file/numbers", "m.msh",
+                         msh22("3\n1 15 2 9 1 50\n2 4 2 5 1 10 20 30 40\n3 4 2 5 1 20 30 40 50\n"));
   mesh = read_mesh("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(mesh.region_names, (std::vector<std::string>{"5"}));
   ASSERT_EQ(mesh.node_sets.count("9"), 1u);
@@ -113,7 +108,7 @@ class GmshFileErrors : public ::testing::TestWithParam<BadMsh> {};
 
 TEST_P(GmshFileErrors, NameTheLineAndSayWhatToDo) {
   const BadMsh& bad = GetParam();
-  const auto dir = write_msh("error_" + bad.name, "bad.msh", bad.text);
+  const auto dir = folder_with_file("gmsh_file/error_" + bad.name, "bad.msh", bad.text);
   const InputError error = read_error("gmsh_file", {{"path", "bad.msh"}}, dir);
   EXPECT_EQ(where_of(error), fmt::format("{}:{}", (dir / "bad.msh").string(), bad.line)) << message_of(error);
   EXPECT_NE(message_of(error).find(bad.message), std::string::npos) << message_of(error);
@@ -179,12 +174,13 @@ INSTANTIATE_TEST_SUITE_P(
     [](const auto& test_case) { return test_case.param.name; });
 
 TEST(GmshFileErrorsWithoutLine, NoTetsEmptyAndMissingFiles) {
-  auto dir = write_msh("no_tets", "m.msh", kHeader + kMshNodes + "$Elements\n1\n1 2 0 10 20 30\n$EndElements\n");
+  auto dir = folder_with_file("gmsh_file/no_tets", "m.msh",
+                              kHeader + kMshNodes + "$Elements\n1\n1 2 0 10 20 30\n$EndElements\n");
   InputError error = read_error("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(where_of(error), (dir / "m.msh").string());
   EXPECT_NE(message_of(error).find("no 4-node tetrahedra"), std::string::npos) << message_of(error);
 
-  dir = write_msh("empty", "m.msh", "\n  \n");
+  dir = folder_with_file("gmsh_file/empty", "m.msh", "\n  \n");
   error = read_error("gmsh_file", {{"path", "m.msh"}}, dir);
   EXPECT_EQ(where_of(error), (dir / "m.msh").string());
   EXPECT_NE(message_of(error).find("empty"), std::string::npos) << message_of(error);

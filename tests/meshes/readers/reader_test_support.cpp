@@ -23,6 +23,12 @@ InputError read_error(const std::string& reader, const json& block, const std::f
 }
 
 std::string where_of(const InputError& error) { return error.problems().empty() ? "" : error.problems().front().where; }
+std::filesystem::path folder_with_file(const std::string& folder, const std::string& name, const std::string& text) {
+  const auto dir = scratch_dir(folder);
+  write_text(dir / name, text);
+  return dir;
+}
+
 std::string message_of(const InputError& error) {
   return error.problems().empty() ? "" : error.problems().front().message;
 }

@@ -28,6 +28,9 @@ TetMesh read_mesh(const std::string& reader, const json& block, const std::files
 InputError read_error(const std::string& reader, const json& block,
                       const std::filesystem::path& directory = fixtures());
 
+// A scratch folder `folder` (under the tests' scratch root) holding one file `name` with `text`; returns the folder.
+std::filesystem::path folder_with_file(const std::string& folder, const std::string& name, const std::string& text);
+
 // The first problem's "where" and message.
 std::string where_of(const InputError& error);
 std::string message_of(const InputError& error);

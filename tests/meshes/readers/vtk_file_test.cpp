@@ -173,8 +173,7 @@ class VtkFileErrors : public ::testing::TestWithParam<BadVtk> {};
 
 TEST_P(VtkFileErrors, NameTheLineAndSayWhatToDo) {
   const BadVtk& bad = GetParam();
-  const auto dir = scratch_dir("vtk_file/error_" + bad.name);
-  write_text(dir / bad.file, bad.text);
+  const auto dir = folder_with_file("vtk_file/error_" + bad.name, bad.file, bad.text);
   const InputError error = read_error("vtk_file", {{"path", bad.file}}, dir);
   const std::string file = (dir / bad.file).string();
   EXPECT_EQ(where_of(error), bad.line > 0 ? fmt::format("{}:{}", file, bad.line) : file) << message_of(error);
